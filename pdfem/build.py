@@ -1,0 +1,148 @@
+"""Turn a scene into bodies: material table, grain and block meshes, boundary conditions.
+
+Global ids: grains are 0..ng-1 in scene order, blocks follow in scene order. Every rank
+builds only the grains it owns at the start (and all blocks), so start-up is parallel too.
+"""
+
+import numpy as np
+
+from pdfem.kernels import params as P
+from pdfem.kernels.integrate import NACC
+from pdfem.mesh.block import block_mesh
+from pdfem.mesh.ellipse import ellipse_mesh
+from pdfem.store import Batch
+
+# Scene names of the material models
+MODELS = {"elastic": P.ELASTIC, "cap": P.CAP}
+# Scene keys of the cap model -> parameter columns
+CAP_KEYS = {"A": P.CAP_A, "B": P.CAP_B, "C": P.CAP_C, "D": P.CAP_D, "R": P.CAP_R,
+            "W": P.CAP_W, "kappa0": P.CAP_KAPPA0, "tension_cutoff": P.CAP_T, "tol": P.CAP_TOL}
+
+
+def material_table(materials):
+    """(nmat, NPAR) parameter table from the resolved [materials] tables, in their order."""
+    table = np.zeros((len(materials), P.NPAR))
+    for i, tbl in enumerate(materials.values()):
+        table[i, P.MODEL] = MODELS[tbl.get("model", "elastic")]
+        table[i, P.RHO] = tbl["density"]
+        table[i, P.BULK] = tbl["bulk"]
+        table[i, P.SHEAR] = tbl["shear"]
+        for key, col in CAP_KEYS.items():
+            if key in tbl:
+                table[i, col] = tbl[key]
+    return table
+
+
+def boundary_flags(conn):
+    """(ne, 4) int8: 1 where element edge k (node k -> k+1) belongs to no other element."""
+    a = conn
+    b = np.roll(conn, -1, axis=1)
+    edges = np.sort(np.stack([a, b], axis=2).reshape(-1, 2), axis=1)
+    _, inv, cnt = np.unique(edges, axis=0, return_inverse=True, return_counts=True)
+    return (cnt[inv.ravel()] == 1).reshape(conn.shape).astype(np.int8)
+
+
+def _batch(fields, nip, nst, gid, nn, ne, isglobal, x, v, lconn, emat, ebnd):
+    """A batch with zero stress and state and free nodes."""
+    nb, nnode, nelem = gid.shape[0], x.shape[0], lconn.shape[0]
+    arrays = {
+        "gid": gid.astype(np.int64), "nn": nn.astype(np.int64), "ne": ne.astype(np.int64),
+        "isglobal": np.full(nb, isglobal, np.int8), "acc": np.zeros((nb, NACC)),
+        "x": x, "v": v, "m": np.zeros(nnode), "bcf": np.zeros((nnode, 2), np.int8),
+        "bcv": np.zeros((nnode, 2)), "lconn": lconn.astype(np.int64),
+        "emat": emat.astype(np.int32), "ebnd": ebnd.astype(np.int8),
+        "sig": np.zeros((nelem, nip, 4)), "mst": np.zeros((nelem, nip, nst)),
+        "hgq": np.zeros((nelem, 2)), "ewint": np.zeros(nelem), "ewp": np.zeros(nelem),
+        "hkey": np.zeros((0, 4), np.int64), "hval": np.zeros(0),
+    }
+    for f in fields:
+        if f.name not in arrays:
+            kind_n = {"body": nb, "node": nnode, "elem": nelem, "pair": 0}[f.kind]
+            arrays[f.name] = np.zeros((kind_n,) + f.shape, f.dtype)
+    return Batch(fields, arrays)
+
+
+def grain_batch(fields, nip, nst, level, gids, center, axes, angle, velocity, mat):
+    """Meshed elliptic grains (6*level^2 quads each), placed and rotated, as one batch."""
+    ref, conn, _ = ellipse_mesh(1.0, 1.0, level)
+    ng, nn, ne = gids.shape[0], ref.shape[0], conn.shape[0]
+    # Scale the unit-disc mesh to each ellipse, rotate, translate
+    loc = ref[None, :, :] * axes[:, None, :]
+    c, s = np.cos(angle)[:, None], np.sin(angle)[:, None]
+    x = np.empty((ng, nn, 2))
+    x[:, :, 0] = c * loc[:, :, 0] - s * loc[:, :, 1] + center[:, 0:1]
+    x[:, :, 1] = s * loc[:, :, 0] + c * loc[:, :, 1] + center[:, 1:2]
+    v = np.repeat(velocity[:, None, :], nn, axis=1)
+    lconn = np.tile(conn, (ng, 1))
+    ebnd = np.tile(boundary_flags(conn), (ng, 1))
+    emat = np.repeat(mat, ne)
+    return _batch(fields, nip, nst, gids, np.full(ng, nn), np.full(ng, ne), 0,
+                  x.reshape(-1, 2), v.reshape(-1, 2), lconn, emat, ebnd)
+
+
+def block_batch(fields, nip, nst, blocks, gid0, mat_ids):
+    """Rectangular blocks (global bodies) meshed nx by ny, in scene order."""
+    parts, sets = [], []
+    for i, blk in enumerate(blocks):
+        x0, y0, x1, y1 = blk["box"]
+        xy, conn, _, node_sets = block_mesh(x0, y0, x1, y1, blk["nx"], blk["ny"])
+        v = np.tile(np.asarray(blk["velocity"], float), (xy.shape[0], 1))
+        emat = np.full(conn.shape[0], mat_ids[blk["material"]])
+        parts.append(_batch(fields, nip, nst, np.array([gid0 + i]), np.array([xy.shape[0]]),
+                            np.array([conn.shape[0]]), 1, xy, v, conn, emat,
+                            boundary_flags(conn)))
+        sets.append(node_sets)
+    return Batch.concat(fields, parts) if parts else Batch.empty(fields), sets
+
+
+def _dof_mask(dof):
+    return np.array(["x" in dof, "y" in dof])
+
+
+def apply_bcs(batch, bcs, box, block_names, block_sets, nglobal_first_node):
+    """Set bcf/bcv of a batch's nodes from the resolved [[bc]] list.
+
+    Block node sets are local to each block; ``nglobal_first_node[i]`` is block i's first
+    node in the batch. Wall conditions apply to every node lying on the wall at t=0.
+    """
+    x, bcf, bcv = batch.a["x"], batch.a["bcf"], batch.a["bcv"]
+    tol = 1e-9 * max(box[2] - box[0], box[3] - box[1])
+    for bc in bcs:
+        # Select the nodes of this condition
+        if "body" in bc:
+            if bc["body"] not in block_names:
+                continue
+            i = block_names.index(bc["body"])
+            nodes = block_sets[i][bc.get("nodes", "all")] + nglobal_first_node[i]
+        else:
+            coord = {"left": (0, box[0]), "right": (0, box[2]), "bottom": (1, box[1]),
+                     "top": (1, box[3])}[bc["wall"]]
+            nodes = np.nonzero(np.abs(x[:, coord[0]] - coord[1]) <= tol)[0]
+        # Constrain the chosen components
+        kind = bc["type"]
+        dof = "xy" if kind == "fixed" else bc["dof"]
+        mask = _dof_mask(dof)
+        for k in range(2):
+            if mask[k]:
+                bcf[nodes, k] = 2 if kind == "velocity" else 1
+                if kind == "velocity":
+                    bcv[nodes, k] = bc["velocity"][k]
+                    x_v = batch.a["v"]
+                    x_v[nodes, k] = bc["velocity"][k]
+
+
+class Layout:
+    """Global numbering of bodies, nodes and elements (by gid), known to every rank."""
+
+    def __init__(self, ngrain, level, blocks):
+        _, conn, _ = ellipse_mesh(1.0, 1.0, level)
+        gnn = int(conn.max()) + 1
+        nn = np.array([gnn] * ngrain + [(b["nx"] + 1) * (b["ny"] + 1) for b in blocks],
+                      np.int64)
+        ne = np.array([conn.shape[0]] * ngrain + [b["nx"] * b["ny"] for b in blocks], np.int64)
+        self.nbody = nn.shape[0]
+        self.nn, self.ne = nn, ne
+        self.node_start = np.concatenate(([0], np.cumsum(nn)[:-1])).astype(np.int64)
+        self.elem_start = np.concatenate(([0], np.cumsum(ne)[:-1])).astype(np.int64)
+        self.nnode, self.nelem = int(nn.sum()), int(ne.sum())
+        self.kind = np.array([0] * ngrain + [1] * len(blocks), np.int8)

@@ -1,0 +1,53 @@
+"""The command line: ``python -m pdfem [command] ...``.
+
+Each command is a module of this package with ``add_parser(subparsers)`` and ``run(args)``.
+With no command, the default scene runs. An :class:`~pdfem.errors.InputError` anywhere ends
+the program with its message on one line and exit status 2; a
+:class:`~pdfem.errors.SimulationError` with exit status 3. Never a traceback for either.
+"""
+
+import argparse
+import importlib
+import sys
+
+from pdfem.errors import InputError, SimulationError
+
+COMMANDS = ("run", "material", "bench")
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports usage errors as InputError (one line, exit 2)."""
+
+    def error(self, message):
+        raise InputError(f"{self.prog}: {message}")
+
+
+def _parser():
+    p = _Parser(prog="pdfem", description="Parallel Discrete Finite Element Method for "
+                "shock compression of granular media.")
+    sub = p.add_subparsers(dest="command", parser_class=_Parser)
+    for name in COMMANDS:
+        importlib.import_module(f"pdfem.cli.{name}").add_parser(sub)
+    return p
+
+
+def _rank():
+    try:
+        from mpi4py import MPI
+
+        return MPI.COMM_WORLD.rank
+    except Exception:
+        return 0
+
+
+def main(argv=None):
+    """Entry point; returns the exit status."""
+    argv = sys.argv[1:] if argv is None else argv
+    try:
+        args = _parser().parse_args(argv or ["run"])
+        mod = importlib.import_module(f"pdfem.cli.{args.command}")
+        return mod.run(args) or 0
+    except (InputError, SimulationError) as exc:
+        if _rank() == 0:
+            print(f"pdfem: error: {exc}", file=sys.stderr, flush=True)
+        return exc.exit_status

@@ -1,0 +1,50 @@
+"""``pdfem run [scene] [-o out.h5]``: run a scene (the default scene when none is given)."""
+
+import os
+from importlib import resources
+
+from pdfem.errors import InputError
+
+DEFAULT_SCENE = "shot912.toml"
+
+
+def default_scene_path():
+    """Path of the scene that runs when ``python -m pdfem`` gets no argument."""
+    return str(resources.files("pdfem") / "scenes" / DEFAULT_SCENE)
+
+
+def add_parser(sub):
+    p = sub.add_parser("run", help="run a scene")
+    p.add_argument("scene", nargs="?", default=None, help="scene TOML file (default: "
+                   f"the packaged {DEFAULT_SCENE})")
+    p.add_argument("-o", "--output", default=None, help="run file (overrides output.path)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing run file")
+    p.add_argument("--quiet", action="store_true", help="no progress or report")
+
+
+def check_output_path(path, force):
+    """The run file must be new (or --force) and its folder writable."""
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise InputError(f"output.path: folder {folder} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise InputError(f"output.path: folder {folder} is not writable")
+    if os.path.exists(path) and not force:
+        raise InputError(f"output.path: {path} exists (use --force to overwrite)")
+
+
+def run(args):
+    from pdfem.driver import run as drive
+    from pdfem.parallel.mpi import world
+    from pdfem.scene import load_scene
+    from pdfem.solver import Simulation
+
+    comm = world()
+    scene = load_scene(args.scene or default_scene_path())
+    out = args.output or scene.resolved["output"]["path"]
+    check_output_path(out, args.force)
+    if comm.rank == 0 and not args.quiet:
+        print(f"pdfem: {scene.path} on {comm.size} rank(s) -> {out}", flush=True)
+    sim = Simulation(scene, comm, nst=0)
+    drive(sim, out, quiet=args.quiet)
+    return 0

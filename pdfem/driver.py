@@ -1,0 +1,94 @@
+"""Run a scene to its end time: frames and energy at intervals, progress, the run report."""
+
+import math
+import sys
+import time
+
+from pdfem.energy import TERMS, balance, global_terms
+from pdfem.io.h5out import RunWriter
+
+
+def _is_event(t, interval):
+    """True when t is (within round-off) a whole multiple of interval."""
+    k = round(t / interval)
+    return k > 0 and abs(t - k * interval) <= 1e-9 * interval
+
+
+def run(sim, out_path, quiet=False, log=print):
+    """Advance ``sim`` to its end time writing ``out_path``; return the summary dict."""
+    comm, r = sim.comm, sim.resolved
+    out = r["output"]
+    interval, e_interval = out["interval"], out["energy_interval"]
+    nframes = math.floor(sim.t_end / interval * (1 + 1e-12)) + 1
+    if not _is_event(sim.t_end, interval):
+        nframes += 1
+    sim.event_intervals = (interval, e_interval)
+    writer = RunWriter(out_path, sim, nframes, out["fields"])
+    rows, ref = [], None
+    t0 = time.perf_counter()
+    last_log = t0
+    ok = False
+    try:
+        # Frame and energy at t = 0
+        writer.write_frame(sim)
+        terms = global_terms(sim)
+        if comm.rank == 0:
+            ref = terms
+            rows.append(_row(sim.t, terms, ref))
+        while sim.t < sim.t_end * (1 - 1e-12):
+            if sim.max_steps and sim.nstep >= sim.max_steps:
+                break
+            sim.step()
+            at_end = sim.t >= sim.t_end * (1 - 1e-12)
+            if _is_event(sim.t, interval) or at_end:
+                with sim.timers.phase("output"):
+                    writer.write_frame(sim)
+            if _is_event(sim.t, e_interval) or at_end:
+                with sim.timers.phase("diagnostics"):
+                    terms = global_terms(sim)
+                    if comm.rank == 0:
+                        rows.append(_row(sim.t, terms, ref))
+            now = time.perf_counter()
+            if comm.rank == 0 and not quiet and now - last_log > 2.0:
+                last_log = now
+                _progress(sim, now - t0, rows, log)
+        ok = True
+    finally:
+        writer.close(rows, TERMS, ok=ok)
+    wall = time.perf_counter() - t0
+    report = sim.timers.report(comm)
+    summary = {"steps": sim.nstep, "time": sim.t, "wall_s": wall,
+               "balance_error": rows[-1][-1] if rows else None,
+               "phases": report, "effects": sim.effect_names, "ranks": comm.size}
+    if comm.rank == 0 and not quiet:
+        _report(summary, log)
+    return summary
+
+
+def _row(t, terms, ref):
+    total, err = balance(terms, ref)
+    return [t] + [terms[k] for k in TERMS] + [total, err]
+
+
+def _progress(sim, wall, rows, log):
+    frac = sim.t / sim.t_end
+    eta = wall * (1 - frac) / frac if frac > 0 else float("nan")
+    err = rows[-1][-1] if rows else float("nan")
+    line = (f"step {sim.nstep}  t={sim.t:.4e} s  dt={sim.dt:.3e} s  "
+            f"{sim.nstep / wall:.0f} steps/s  ETA {eta:.0f} s  energy err {err:.2e}")
+    if sys.stdout.isatty():
+        print("\r" + line, end="", flush=True)
+    else:
+        log(line)
+
+
+def _report(summary, log):
+    if sys.stdout.isatty():
+        print()
+    log(f"done: {summary['steps']} steps to t={summary['time']:.6e} s in "
+        f"{summary['wall_s']:.2f} s on {summary['ranks']} rank(s); energy balance error "
+        f"{summary['balance_error']:.3e}; effects: {', '.join(summary['effects']) or 'none'}")
+    log("phase                 min [s]    avg [s]    max [s]")
+    for p, (lo, avg, hi) in summary["phases"].items():
+        if hi > 0:
+            log(f"{p:<20} {lo:10.3f} {avg:10.3f} {hi:10.3f}")

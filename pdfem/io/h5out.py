@@ -1,0 +1,127 @@
+"""The run file: one HDF5 file written by all ranks through h5py's mpio driver.
+
+Layout (everything by global id, so 1-rank and N-rank files compare equal):
+    /mesh/node_body (NN,), /mesh/conn (NE,4) global node ids, /mesh/elem_body (NE,),
+    /mesh/elem_material (NE,), /mesh/body_kind (NB,) 0 grain 1 block
+    /frames/time (F,), /frames/x (F,NN,2), /frames/v (F,NN,2), /frames/stress (F,NE,nip,4)
+    /energy/time (E,) and one (E,) dataset per term, plus /energy/balance_error
+    attributes: scene (resolved TOML), effects, pdfem version
+The file is written as ``<path>.part`` and renamed to ``<path>`` only when complete.
+"""
+
+import os
+
+import h5py
+import numpy as np
+
+from pdfem import __version__
+from pdfem.io.gather import to_blocks
+from pdfem.store import ranges
+
+
+class RunWriter:
+    """Collective writer of frames and the energy series of one run."""
+
+    def __init__(self, path, sim, nframes, fields=("x", "v", "stress")):
+        comm = sim.comm
+        self.comm, self.path, self.fields = comm, path, tuple(fields)
+        self.tmp = path + ".part"
+        self.f = h5py.File(self.tmp, "w", driver="mpio", comm=comm)
+        layout = sim.layout
+        self.nn_tot, self.ne_tot = layout.nnode, layout.nelem
+        f = self.f
+        f.attrs["scene"] = sim.scene.to_toml_string()
+        f.attrs["effects"] = ",".join(sim.effect_names)
+        f.attrs["pdfem_version"] = __version__
+        f.attrs["nranks"] = comm.size
+        # Static mesh description (written by rank 0: it is known to every rank)
+        mesh = f.create_group("mesh")
+        dsets = {
+            "node_body": mesh.create_dataset("node_body", (self.nn_tot,), "i8"),
+            "conn": mesh.create_dataset("conn", (self.ne_tot, 4), "i8"),
+            "elem_body": mesh.create_dataset("elem_body", (self.ne_tot,), "i8"),
+            "elem_material": mesh.create_dataset("elem_material", (self.ne_tot,), "i4"),
+            "body_kind": mesh.create_dataset("body_kind", (layout.nbody,), "i1"),
+        }
+        fr = f.create_group("frames")
+        self.time = fr.create_dataset("time", (nframes,), "f8")
+        self.dsets = {}
+        if "x" in self.fields:
+            self.dsets["x"] = fr.create_dataset("x", (nframes, self.nn_tot, 2), "f8")
+        if "v" in self.fields:
+            self.dsets["v"] = fr.create_dataset("v", (nframes, self.nn_tot, 2), "f8")
+        if "stress" in self.fields:
+            self.dsets["stress"] = fr.create_dataset("stress", (nframes, self.ne_tot, sim.nip, 4),
+                                                     "f8")
+        self.nframe = 0
+        self._write_mesh(sim, dsets)
+
+    def _rows(self, sim):
+        """Global node and element indices of this rank's rows (globals on rank 0 only)."""
+        s, lay = sim.store, sim.layout
+        bodies = np.arange(s.nb_own)
+        if self.comm.rank != 0:
+            bodies = bodies[s.isglobal[: s.nb_own] == 0]
+        gids = s.gid[bodies]
+        nidx = ranges(s.nstart[bodies], s.nn[bodies])
+        eidx = ranges(s.estart[bodies], s.ne[bodies])
+        gn = ranges(lay.node_start[gids], s.nn[bodies])
+        ge = ranges(lay.elem_start[gids], s.ne[bodies])
+        return nidx, eidx, gn, ge
+
+    def _write_mesh(self, sim, dsets):
+        s, lay = sim.store, sim.layout
+        nidx, eidx, gn, ge = self._rows(sim)
+        gconn = s.lconn[eidx] + lay.node_start[s.elem_gid[eidx]][:, None]
+        for name, idx, rows, n in (("node_body", gn, s.gid[s.node_body[nidx]], self.nn_tot),
+                                   ("conn", ge, gconn, self.ne_tot),
+                                   ("elem_body", ge, s.elem_gid[eidx], self.ne_tot),
+                                   ("elem_material", ge, s.emat[eidx], self.ne_tot)):
+            lo, hi, blk = to_blocks(self.comm, idx, rows, n)
+            if hi > lo:
+                dsets[name][lo:hi] = blk.astype(dsets[name].dtype).reshape((hi - lo,)
+                                                                            + dsets[name].shape[1:])
+        if self.comm.rank == 0:
+            dsets["body_kind"][:] = lay.kind
+
+    def write_frame(self, sim):
+        """Write x, v and stress of every body at the current time (collective)."""
+        s = sim.store
+        nidx, eidx, gn, ge = self._rows(sim)
+        k = self.nframe
+        for name, idx, rows, n in (("x", gn, s.x[nidx] if "x" in self.dsets else None,
+                                    self.nn_tot),
+                                   ("v", gn, s.v[nidx] if "v" in self.dsets else None,
+                                    self.nn_tot),
+                                   ("stress", ge, s.sig[eidx] if "stress" in self.dsets
+                                    else None, self.ne_tot)):
+            if name not in self.dsets:
+                continue
+            lo, hi, blk = to_blocks(self.comm, idx, rows, n)
+            d = self.dsets[name]
+            if hi > lo:
+                d[k, lo:hi] = blk.reshape((hi - lo,) + d.shape[2:])
+        if self.comm.rank == 0:
+            self.time[k] = sim.t
+        self.nframe += 1
+
+    def close(self, energy_rows, terms, ok=True):
+        """Write the energy series (rank 0 holds it), close, and rename into place."""
+        comm = self.comm
+        n = comm.bcast(len(energy_rows) if comm.rank == 0 else None, root=0)
+        g = self.f.create_group("energy")
+        cols = ("time",) + tuple(terms) + ("total", "balance_error")
+        ds = {c: g.create_dataset(c, (n,), "f8") for c in cols}
+        if comm.rank == 0 and n:
+            arr = np.array(energy_rows)
+            for i, c in enumerate(cols):
+                ds[c][:] = arr[:, i]
+        self.f.attrs["frames_written"] = self.nframe
+        self.f.close()
+        comm.Barrier()
+        if comm.rank == 0:
+            if ok:
+                os.replace(self.tmp, self.path)
+            else:
+                os.remove(self.tmp)
+        comm.Barrier()

@@ -1,0 +1,152 @@
+"""Migration, ghost lists and the per-step halo refresh.
+
+A rebuild runs in two phases. Phase A sends every owned grain whose centroid lies in a cell
+of another rank to that rank, with all of its state and its contact history. Phase B sends
+a copy of every owned grain to each rank owning a cell of its 3x3 cell neighbourhood: those
+copies are the ghosts. Between rebuilds only node positions and velocities (and the fields
+effects register) of ghosts are refreshed, from owner to ghost, every step.
+"""
+
+import numpy as np
+from numba import njit
+
+from pdfem.parallel.mpi import alltoallv
+from pdfem.store import Batch, Store, ranges
+
+
+@njit(cache=True)
+def body_centroids(x, nstart, nn, b0, b1, out):
+    """Mean node position of bodies [b0, b1), summed in node order."""
+    for b in range(b0, b1):
+        sx = 0.0
+        sy = 0.0
+        for i in range(nstart[b], nstart[b] + nn[b]):
+            sx += x[i, 0]
+            sy += x[i, 1]
+        out[b - b0, 0] = sx / nn[b]
+        out[b - b0, 1] = sy / nn[b]
+
+
+def owned_grain_cells(store, grid, nglobal):
+    """Cell of the centroid of each owned grain (local bodies [nglobal, nb_own))."""
+    n = store.nb_own - nglobal
+    cent = np.empty((n, 2))
+    body_centroids(store.x, store.nstart, store.nn, nglobal, store.nb_own, cent)
+    return grid.cell_of(cent)
+
+
+def neighbour_ranks(grid, owner, cells):
+    """(n, 9) ranks owning the 3x3 cell block around each cell (clipped at the grid edge)."""
+    ix, iy = cells % grid.nx, cells // grid.nx
+    out = np.empty((cells.shape[0], 9), np.int64)
+    k = 0
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            jx = np.clip(ix + dx, 0, grid.nx - 1)
+            jy = np.clip(iy + dy, 0, grid.ny - 1)
+            out[:, k] = owner[jx + grid.nx * jy]
+            k += 1
+    return out
+
+
+def _history_rows(batches, fields, keep_gids, global_gids):
+    """Unique history rows (by key) that involve a kept grain or only global bodies."""
+    keys = np.concatenate([b.a["hkey"] for b in batches])
+    vals = np.concatenate([b.a["hval"] for b in batches])
+    if keys.shape[0] == 0:
+        return keys, vals
+    keys, first = np.unique(keys, axis=0, return_index=True)
+    vals = vals[first]
+    a, b = keys[:, 0], keys[:, 2]
+    mine = np.isin(a, keep_gids) | np.isin(b, keep_gids)
+    both_global = np.isin(a, global_gids) & np.isin(b, global_gids)
+    sel = mine | both_global
+    return keys[sel], vals[sel]
+
+
+class Halo:
+    """Per-step owner -> ghost refresh plan: node indices to send, ghost slices to fill."""
+
+    def __init__(self, comm, send, recv):
+        self.comm = comm
+        self.send = send  # {rank: local node indices, in the order the receiver stores them}
+        self.recv = recv  # {rank: (first ghost node, count)}
+
+    def refresh(self, arrays):
+        """Copy owner values of the given node arrays into the ghosts (x, v, ...)."""
+        comm = self.comm
+        reqs, rbufs = [], {}
+        for r, (n0, cnt) in self.recv.items():
+            width = sum(int(np.prod(a.shape[1:])) for a in arrays)
+            rbufs[r] = np.empty(cnt * width, np.float64)
+            reqs.append(comm.Irecv(rbufs[r], source=r, tag=7))
+        for r, idx in self.send.items():
+            buf = np.concatenate([a[idx].reshape(idx.shape[0], -1) for a in arrays], axis=1)
+            reqs.append(comm.Isend(np.ascontiguousarray(buf).ravel(), dest=r, tag=7))
+        from mpi4py import MPI
+
+        MPI.Request.Waitall(reqs)
+        for r, (n0, cnt) in self.recv.items():
+            buf = rbufs[r].reshape(cnt, -1)
+            col = 0
+            for a in arrays:
+                w = int(np.prod(a.shape[1:]))
+                a[n0 : n0 + cnt] = buf[:, col : col + w].reshape((cnt,) + a.shape[1:])
+                col += w
+
+
+def rebuild(comm, store, grid, owner, nglobal):
+    """Migrate grains to the owners of their cells and rebuild the ghosts.
+
+    Returns the new :class:`Store` and its :class:`Halo`. The first ``nglobal`` local bodies
+    are the global bodies, identical on every rank; they are neither migrated nor ghosted.
+    """
+    fields, rank, size = store.fields, comm.rank, comm.size
+
+    # Phase A: owned grains go to the owner of their centroid cell, with their history
+    cells = owned_grain_cells(store, grid, nglobal)
+    dest = owner[cells]
+    local = np.arange(nglobal, store.nb_own)
+    bufs = [store.take(local[dest == r]).to_buffer() if r != rank else np.zeros(0)
+            for r in range(size)]
+    stay = store.take(local[dest == rank])
+    got = [Batch.from_buffer(fields, b)[0] for r, b in enumerate(alltoallv(comm, bufs))
+           if r != rank and b.size]
+    owned = Batch.concat(fields, [stay] + got)
+    order = np.argsort(owned.a["gid"], kind="stable")
+    glob = store.take(np.arange(nglobal), with_history=False)
+    global_gids = glob.a["gid"]
+    hist_src = [stay] + got + [store.take(np.arange(nglobal))]
+    hkeys, hvals = _history_rows(hist_src, fields, owned.a["gid"], global_gids)
+    owned_tmp = Store(fields, Batch.concat(fields, [glob, owned]), nglobal + owned.nbody)
+    sorted_owned = owned_tmp.take(nglobal + order, with_history=False)
+    sorted_owned.a["hkey"], sorted_owned.a["hval"] = hkeys, hvals
+
+    # Phase B: ghosts for every rank owning a cell next to an owned grain's cell
+    base = Store(fields, Batch.concat(fields, [glob, sorted_owned]), nglobal + owned.nbody)
+    cells = owned_grain_cells(base, grid, nglobal)
+    nbr = neighbour_ranks(grid, owner, cells)
+    send_bodies = {}
+    bufs = []
+    for r in range(size):
+        sel = np.nonzero((nbr == r).any(axis=1))[0] + nglobal if r != rank else []
+        if len(sel):
+            send_bodies[r] = np.asarray(sel, np.int64)
+            bufs.append(base.take(send_bodies[r], with_history=False).to_buffer())
+        else:
+            bufs.append(np.zeros(0))
+    ghosts, sources = [], []
+    for r, b in enumerate(alltoallv(comm, bufs)):
+        if r != rank and b.size:
+            ghosts.append(Batch.from_buffer(fields, b)[0])
+            sources.append(r)
+
+    # Assemble: globals, owned (by gid), ghosts (by source rank, then gid as sent)
+    new = Store(fields, Batch.concat(fields, [glob, sorted_owned] + ghosts), base.nb_own)
+    send = {r: ranges(new.nstart[bs], new.nn[bs]) for r, bs in send_bodies.items()}
+    recv, n0 = {}, new.nn_own
+    for r, g in zip(sources, ghosts):
+        cnt = int(g.a["nn"].sum())
+        recv[r] = (n0, cnt)
+        n0 += cnt
+    return new, Halo(comm, send, recv)

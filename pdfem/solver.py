@@ -1,0 +1,209 @@
+"""The step loop. Read :meth:`Simulation.step` top to bottom: it is the architecture's list.
+
+1. positions to t+dt (eq. 72)
+2. neighbourhood: rebuild (migrate + ghosts) when a node moved more than half the skin,
+   otherwise refresh the ghosts' positions and velocities
+3. internal forces of owned elements (strain increment -> material -> stress -> forces)
+4. contact forces on owned nodes (effect hook)
+5. body forces (effect hooks); boundary conditions and damping enter step 7
+6. heat (effect hook)
+7. next dt (global min), velocities to the next half step (eq. 68), diagnostics, output
+"""
+
+import math
+
+import numpy as np
+from mpi4py import MPI
+
+from partition import CellGrid, partition
+from pdfem import build
+from pdfem.effects import active_effects
+from pdfem.errors import SimulationError
+from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
+from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
+from pdfem.kernels.stable import q4_stable_dt
+from pdfem.parallel.exchange import rebuild
+from pdfem.store import Batch, Store, core_fields
+from pdfem.timers import Timers
+
+
+class Simulation:
+    """One run of a scene on a communicator: setup, :meth:`step`, :meth:`run`."""
+
+    def __init__(self, scene, comm, nst=0, init_state=None):
+        r = scene.resolved
+        self.scene, self.comm, self.resolved = scene, comm, r
+        self.timers = Timers()
+        self.effects = active_effects(r, scene)
+        self.effect_names = [e.name for e in self.effects]
+        damping = [e for e in self.effects if e.name == "damping"]
+        self.gamma = damping[0].gamma if damping else 0.0
+        self.mat_params = build.material_table(r["materials"])
+        self.mat_ids = {name: i for i, name in enumerate(r["materials"])}
+        el = r["element"]
+        self.nip = 1 if el["rule"] == "1pt" else 4
+        self.element_kernel = q4_forces_1pt if el["rule"] == "1pt" else q4_forces_2x2
+        self.hg_coef = float(el["hourglass"]) if el["rule"] == "1pt" else 0.0
+        self.fields = core_fields(self.nip, nst, NACC)
+        for eff in self.effects:
+            self.fields += list(eff.extra_fields)
+        self.halo_fields = ["x", "v"] + [n for e in self.effects for n in e.halo_fields]
+        dom, tm = r["domain"], r["time"]
+        self.box = tuple(dom["box"])
+        self.grid = CellGrid(self.box, dom["cell_size"])
+        self.skin = dom["skin"]
+        self.safety, self.t_end = tm["safety"], tm["end"]
+        self.dt_max, self.dt_min, self.max_steps = tm["dt_max"], tm["dt_min"], tm["max_steps"]
+        out = r["output"]
+        self.event_intervals = (out["interval"], out["energy_interval"])
+        self._target = None
+        self.layout = build.Layout(scene.grains["center"].shape[0], el["level"],
+                                   r.get("blocks", []))
+        self._build_initial(scene, init_state)
+        for eff in self.effects:
+            eff.setup(self)
+        # Forces at t = 0 and the first half step
+        self.t, self.nstep = 0.0, 0
+        self.du = np.zeros_like(self.store.v)
+        self.f = np.zeros_like(self.store.v)
+        self.kin = np.zeros(self.store.nbody)
+        self.compute_forces()
+        self.dt_prev = 0.0
+        self.dt = self.next_dt()
+        self.advance_velocities()
+
+    # ------------------------------------------------------------------ setup
+    def _build_initial(self, scene, init_state):
+        """Mesh the grains this rank owns at t=0 and all blocks; distribute; lumped mass."""
+        comm, r = self.comm, self.resolved
+        g = scene.grains
+        ng = g["center"].shape[0]
+        cells = self.grid.cell_of(g["center"])
+        weights = np.bincount(cells, minlength=self.grid.ncell).astype(float)
+        self.owner = partition(r["domain"]["partition"], weights, self.grid.nx, self.grid.ny,
+                               comm.size)
+        mine = np.nonzero(self.owner[cells] == comm.rank)[0]
+        level = r["element"]["level"]
+        grains = build.grain_batch(self.fields, self.nip, self.fields_nst(), level,
+                                   mine.astype(np.int64), g["center"][mine], g["axes"][mine],
+                                   g["angle"][mine], g["velocity"][mine], g["material"][mine])
+        blocks = r.get("blocks", [])
+        bbatch, bsets = build.block_batch(self.fields, self.nip, self.fields_nst(), blocks, ng,
+                                          self.mat_ids)
+        self.nglobal = len(blocks)
+        first = np.concatenate(([0], np.cumsum(bbatch.a["nn"])[:-1])).astype(np.int64)
+        build.apply_bcs(bbatch, r.get("bc", []), self.box, [b["name"] for b in blocks], bsets,
+                        first)
+        build.apply_bcs(grains, [b for b in r.get("bc", []) if "wall" in b], self.box, [], [],
+                        [])
+        batch = Batch.concat(self.fields, [bbatch, grains])
+        store = Store(self.fields, batch, batch.nbody)
+        q4_lumped_mass(store.x, store.conn, store.emat, self.mat_params, 0, store.ne_own,
+                       store.m)
+        if init_state is not None:
+            init_state(self, store)
+        with self.timers.phase("migration"):
+            self.store, self.halo = rebuild(comm, store, self.grid, self.owner, self.nglobal)
+
+    def fields_nst(self):
+        """Number of material state variables per integration point."""
+        return [f for f in self.fields if f.name == "mst"][0].shape[1]
+
+    # ------------------------------------------------------------------ the step
+    def step(self):
+        """Advance one time step (see the module docstring for the order)."""
+        s = self.store
+        # 1. positions to t + dt
+        with self.timers.phase("integration"):
+            advance_positions(s.x, s.v, self.dt, s.nn_own, self.du)
+            self.t = self._target if self._target is not None else self.t + self.dt
+            self.nstep += 1
+        # 2. neighbourhood: rebuild or halo refresh
+        self.neighbourhood()
+        # 3-6. internal, contact, body forces and heat
+        self.compute_forces()
+        # 7. next dt, velocities, diagnostics
+        self.dt_prev = self.dt
+        self.dt = self.next_dt()
+        self.advance_velocities()
+
+    def neighbourhood(self):
+        """Rebuild ghosts and migrate when any node moved more than half the skin."""
+        s = self.store
+        moved = max_displacement2(s.x, s.xref, s.nn_own) > (0.5 * self.skin) ** 2
+        flag = self.comm.allreduce(int(moved), op=MPI.MAX)
+        if flag:
+            with self.timers.phase("migration"):
+                self.store, self.halo = rebuild(self.comm, s, self.grid, self.owner,
+                                                self.nglobal)
+            s = self.store
+            self.f = np.zeros_like(s.v)
+            self.kin = np.zeros(s.nbody)
+            for eff in self.effects:
+                eff.after_rebuild(self) if hasattr(eff, "after_rebuild") else None
+        else:
+            with self.timers.phase("halo"):
+                self.halo.refresh([getattr(s, n) for n in self.halo_fields])
+        # Step increments of ghosts are derived exactly as their owners computed them
+        self.du = self.dt * s.v
+
+    def compute_forces(self):
+        """Residual force f = P - I on owned nodes: elements, contact, body forces."""
+        s = self.store
+        self.f[:] = 0.0
+        with self.timers.phase("elements"):
+            bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
+                                      s.mst, s.hgq, self.hg_coef, 0, s.ne_own, self.f, s.ewint,
+                                      s.ewp)
+        self._bad_element = bad
+        for eff in self.effects:
+            eff.body_force(self)
+
+    def next_dt(self):
+        """Global stable step times the safety factor, clipped to the next event; guards."""
+        s = self.store
+        dt_loc = q4_stable_dt(s.x, s.conn, s.emat, self.mat_params, 0, s.ne_own)
+        for eff in self.effects:
+            if hasattr(eff, "stable_dt"):
+                dt_loc = min(dt_loc, eff.stable_dt(self))
+        err = 1.0 if self._bad_element >= 0 else 0.0
+        red = np.array([-dt_loc, err])
+        self.comm.Allreduce(MPI.IN_PLACE, red, op=MPI.MAX)
+        if red[1] > 0:
+            self._fail_bad_element()
+        dt_stable = -red[0]
+        if dt_stable < self.dt_min:
+            raise SimulationError(f"step {self.nstep}, t={self.t:.6e} s: stable dt "
+                                  f"{dt_stable:.3e} s is below time.dt_min {self.dt_min:.3e} s")
+        dt = min(self.safety * dt_stable, self.dt_max)
+        # Land exactly on the next frame, energy sample or the end time
+        event = self.next_event()
+        self._target = None
+        if self.t + dt >= event * (1 - 1e-12):
+            dt, self._target = event - self.t, event
+        return dt
+
+    def next_event(self):
+        """Time of the next output frame, energy sample or the end, after the current t."""
+        event = self.t_end
+        for iv in self.event_intervals:
+            event = min(event, (math.floor(self.t / iv + 1e-9) + 1) * iv)
+        return event
+
+    def _fail_bad_element(self):
+        s = self.store
+        msg = ""
+        if self._bad_element >= 0:
+            e = self._bad_element
+            msg = (f"step {self.nstep}, t={self.t:.6e} s: element {s.elem_loc[e]} of body "
+                   f"{s.elem_gid[e]} is inverted or its material update failed")
+        msgs = [m for m in self.comm.allgather(msg) if m]
+        raise SimulationError(msgs[0])
+
+    def advance_velocities(self):
+        """Eq. 68 with the average of the two half steps; BCs, damping, kinetic energy."""
+        s = self.store
+        dt_avg = 0.5 * (self.dt_prev + self.dt)
+        with self.timers.phase("integration"):
+            advance_velocities(s.v, self.f, s.m, s.bcf, s.bcv, self.gamma, dt_avg, s.nn_own,
+                               s.node_body, s.acc, self.kin[: s.nb_own])

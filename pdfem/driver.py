@@ -8,10 +8,20 @@ from pdfem.energy import TERMS, balance, global_terms
 from pdfem.io.h5out import RunWriter
 
 
-def _is_event(t, interval):
-    """True when t is (within round-off) a whole multiple of interval."""
-    k = round(t / interval)
-    return k > 0 and abs(t - k * interval) <= 1e-9 * interval
+class Schedule:
+    """Output at the first step at or past each multiple of an interval (exact times are
+    stored with the data; steps are never shortened to land on them)."""
+
+    def __init__(self, interval):
+        self.interval, self.k = interval, 1
+
+    def due(self, t):
+        """True (once) when t has reached the next multiple of the interval."""
+        if t < self.k * self.interval * (1 - 1e-12):
+            return False
+        while self.k * self.interval * (1 - 1e-12) <= t:
+            self.k += 1
+        return True
 
 
 def run(sim, out_path, quiet=False, log=print):
@@ -19,10 +29,8 @@ def run(sim, out_path, quiet=False, log=print):
     comm, r = sim.comm, sim.resolved
     out = r["output"]
     interval, e_interval = out["interval"], out["energy_interval"]
-    nframes = math.floor(sim.t_end / interval * (1 + 1e-12)) + 1
-    if not _is_event(sim.t_end, interval):
-        nframes += 1
-    sim.event_intervals = (interval, e_interval)
+    nframes = math.floor(sim.t_end / interval * (1 + 1e-12)) + 2
+    frames, samples = Schedule(interval), Schedule(e_interval)
     writer = RunWriter(out_path, sim, nframes, out["fields"])
     rows, ref = [], None
     t0 = time.perf_counter()
@@ -40,10 +48,10 @@ def run(sim, out_path, quiet=False, log=print):
                 break
             sim.step()
             at_end = sim.t >= sim.t_end * (1 - 1e-12)
-            if _is_event(sim.t, interval) or at_end:
+            if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
                 with sim.timers.phase("output"):
                     writer.write_frame(sim)
-            if _is_event(sim.t, e_interval) or at_end:
+            if samples.due(sim.t) or at_end:
                 with sim.timers.phase("diagnostics"):
                     terms = global_terms(sim)
                     if comm.rank == 0:

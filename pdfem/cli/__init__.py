@@ -12,7 +12,7 @@ import sys
 
 from pdfem.errors import InputError, SimulationError
 
-COMMANDS = ("run", "material", "bench")
+COMMANDS = ("run",)
 
 
 class _Parser(argparse.ArgumentParser):

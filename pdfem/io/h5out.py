@@ -44,15 +44,16 @@ class RunWriter:
             "body_kind": mesh.create_dataset("body_kind", (layout.nbody,), "i1"),
         }
         fr = f.create_group("frames")
-        self.time = fr.create_dataset("time", (nframes,), "f8")
+        # Frame datasets hold at most nframes; they are cut to the frames written at close
+        shapes = {"x": (self.nn_tot, 2), "v": (self.nn_tot, 2),
+                  "stress": (self.ne_tot, sim.nip, 4)}
+        self.time = fr.create_dataset("time", (nframes,), "f8", maxshape=(None,))
         self.dsets = {}
-        if "x" in self.fields:
-            self.dsets["x"] = fr.create_dataset("x", (nframes, self.nn_tot, 2), "f8")
-        if "v" in self.fields:
-            self.dsets["v"] = fr.create_dataset("v", (nframes, self.nn_tot, 2), "f8")
-        if "stress" in self.fields:
-            self.dsets["stress"] = fr.create_dataset("stress", (nframes, self.ne_tot, sim.nip, 4),
-                                                     "f8")
+        for name in self.fields:
+            shp = shapes[name]
+            self.dsets[name] = fr.create_dataset(name, (nframes,) + shp, "f8",
+                                                 maxshape=(None,) + shp,
+                                                 chunks=(1,) + tuple(max(1, n) for n in shp))
         self.nframe = 0
         self._write_mesh(sim, dsets)
 
@@ -116,7 +117,9 @@ class RunWriter:
             arr = np.array(energy_rows)
             for i, c in enumerate(cols):
                 ds[c][:] = arr[:, i]
-        self.f.attrs["frames_written"] = self.nframe
+        self.time.resize((self.nframe,))
+        for d in self.dsets.values():
+            d.resize((self.nframe,) + d.shape[1:])
         self.f.close()
         comm.Barrier()
         if comm.rank == 0:

@@ -16,7 +16,9 @@ ACC_DAMP = 0  # energy dissipated by mass-proportional damping [J/m]
 ACC_BC = 1  # work done by boundary-condition reactions [J/m]
 ACC_FRIC = 2  # energy dissipated by contact friction [J/m]
 ACC_CWORK = 3  # work done by contact forces on the body [J/m]
-NACC = 4
+ACC_DAMP_P = 4  # damping dissipation of the current step's later half interval (pending)
+ACC_BC_P = 5  # reaction work of the current step's later half interval (pending)
+NACC = 6
 
 
 @njit(cache=True)
@@ -38,15 +40,25 @@ def advance_positions(x, v, dt, n1, du):
 
 
 @njit(cache=True)
-def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin):
+def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin, first):
     """Eq. 68 with boundary conditions; accumulate damping and reaction work per body.
 
     bcf[i, k]: 0 free, 1 fixed (velocity 0), 2 prescribed velocity bcv[i, k].
     kin[b] receives the product-form kinetic energy of body b at the current whole step.
+    A force F_n acting at step n does work dt F_n v_{n-1/2}/2 in the interval before the
+    step and dt F_n v_{n+1/2}/2 in the one after; the second half is kept pending until the
+    next step, so that K_n + U_n and the accumulated work balance exactly at every step.
+    ``first`` marks the start-up half step, which has no interval before it.
     """
     c1, c2 = damping_coefficients(gamma, dt)
+    # Pending halves of the previous step belong to the interval that just ended
     for b in range(kin.shape[0]):
         kin[b] = 0.0
+        acc[b, ACC_DAMP] += acc[b, ACC_DAMP_P]
+        acc[b, ACC_BC] += acc[b, ACC_BC_P]
+        acc[b, ACC_DAMP_P] = 0.0
+        acc[b, ACC_BC_P] = 0.0
+    before = 0.0 if first else 1.0
     for i in range(n1):
         b = node_body[i]
         mi = m[i]
@@ -58,9 +70,12 @@ def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin):
                 vbc = 0.0 if bcf[i, k] == 1 else bcv[i, k]
                 react = mi * (vbc - vnew) / c2
                 vnew = vbc
-                acc[b, ACC_BC] += dt * react * 0.5 * (vnew + vold)
-            vavg = 0.5 * (vnew + vold)
-            acc[b, ACC_DAMP] += dt * gamma * mi * vavg * vavg
+                acc[b, ACC_BC] += before * 0.5 * dt * react * vold
+                acc[b, ACC_BC_P] += 0.5 * dt * react * vnew
+            # Damping force -gamma m v_avg does (negative) work on both half intervals
+            fd = gamma * mi * 0.5 * (vnew + vold)
+            acc[b, ACC_DAMP] += before * 0.5 * dt * fd * vold
+            acc[b, ACC_DAMP_P] += 0.5 * dt * fd * vnew
             kin[b] += 0.5 * mi * vold * vnew
             v[i, k] = vnew
 

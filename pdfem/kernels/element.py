@@ -1,0 +1,393 @@
+"""Updated Lagrangian 4-node quad (plane strain, thickness 1 m): stress update and forces.
+
+Objective update (Hughes & Winget 1980) per integration point, with du = x_{n+1} - x_n:
+    L = d du / d x_mid evaluated at x_mid = x - du/2,
+    deps = sym(L), dw = skew(L), Q = (I - dw/2)^-1 (I + dw/2)  (Cayley, exactly orthogonal),
+    sig <- Q sig Q^T  (sigma_zz unchanged), then sig <- material_update(sig, deps),
+and the internal forces use B at the current configuration x. A rigid rotation makes L exactly
+skew at x_mid, so it rotates the stress and adds none.
+
+Node order is counter-clockwise; natural coordinates of nodes 1..4 are (-1,-1), (1,-1), (1,1),
+(-1,1). The 2x2 rule numbers its points in the same order at (+-1/sqrt3, +-1/sqrt3), weight 1.
+
+1-point rule: mean (= centroid) gradient b_I = dN_I/dx at the centre, b_x = (y24, y31, y42,
+y13)/(2A), b_y = (x42, x13, x24, x31)/(2A), plus Flanagan-Belytschko (1981) stiffness
+hourglass control with h = (1, -1, 1, -1):
+    gamma_I = (h_I - (h.x) b_xI - (h.y) b_yI) / 4        (gamma.h = 1, gamma . linear = 0)
+    dq_a    = sum_I gamma_I du_Ia                         (gamma at x_mid)
+    k       = hg_coef (K + 4G/3) (B.B) / A,  B_iI = int dN_I/dx_i dA = A b_iI
+    Q_a    <- Q_ab Q_b + k dq_a   (rotated with the element spin, then incremented; Q = hgq[e])
+    f_Ia   = Q_a gamma_I          (gamma at x; internal force, subtracted from f)
+The hourglass work 0.5 (Q_rotated + Q_new).dq joins ewint; its stored energy is 0.5 Q.Q / k.
+hgq of shape (0, 2) switches hourglass control off.
+
+Force kernels return -1 on success, else the index of the first element whose area / IP
+Jacobian (mid-step or current) is not positive or whose material update failed; they stop
+there, leaving that element partly updated (the run must then abort).
+"""
+
+import numpy as np
+from numba import njit
+
+from pdfem.kernels.elastic import elastic_energy_density
+from pdfem.kernels.material import material_update
+from pdfem.kernels.params import BULK, RHO, SHEAR
+
+GP = 0.5773502691896257  # 1/sqrt(3), 2x2 Gauss abscissa
+XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
+ETA = np.array([-1.0, -1.0, 1.0, 1.0])
+HG = np.array([1.0, -1.0, 1.0, -1.0])  # hourglass base vector h
+
+
+@njit(cache=True)
+def _gather(x, du, conn, e, xc, xm, ue):
+    """Current coordinates xc, mid-step coordinates xm and increments ue of element e."""
+    for i in range(4):
+        n = conn[e, i]
+        for k in range(2):
+            xc[i, k] = x[n, k]
+            ue[i, k] = du[n, k]
+            xm[i, k] = x[n, k] - 0.5 * du[n, k]
+
+
+@njit(cache=True)
+def _bvec(xe, bx, by):
+    """Centroid gradients bx, by (4,) of a quad; returns its area (bx, by unset if <= 0)."""
+    # Area from the cross product of the diagonals
+    a = 0.5 * ((xe[2, 0] - xe[0, 0]) * (xe[3, 1] - xe[1, 1])
+               - (xe[3, 0] - xe[1, 0]) * (xe[2, 1] - xe[0, 1]))
+    if a <= 0.0:
+        return a
+    # Flanagan-Belytschko mean gradient
+    r = 1.0 / (2.0 * a)
+    for i in range(4):
+        ip = (i + 1) % 4
+        im = (i + 3) % 4
+        bx[i] = (xe[ip, 1] - xe[im, 1]) * r
+        by[i] = (xe[im, 0] - xe[ip, 0]) * r
+    return a
+
+
+@njit(cache=True)
+def _ip_grad(xe, xi, eta, dx, dy):
+    """Shape function gradients dx, dy (4,) at (xi, eta); returns det J (dx, dy unset if <= 0)."""
+    # Jacobian of the isoparametric map
+    j11 = 0.0
+    j12 = 0.0
+    j21 = 0.0
+    j22 = 0.0
+    for i in range(4):
+        dxi = 0.25 * XI[i] * (1.0 + ETA[i] * eta)
+        deta = 0.25 * ETA[i] * (1.0 + XI[i] * xi)
+        j11 += dxi * xe[i, 0]
+        j12 += deta * xe[i, 0]
+        j21 += dxi * xe[i, 1]
+        j22 += deta * xe[i, 1]
+    det = j11 * j22 - j12 * j21
+    if det <= 0.0:
+        return det
+    # Chain rule through the inverse Jacobian
+    r = 1.0 / det
+    for i in range(4):
+        dxi = 0.25 * XI[i] * (1.0 + ETA[i] * eta)
+        deta = 0.25 * ETA[i] * (1.0 + XI[i] * xi)
+        dx[i] = (j22 * dxi - j21 * deta) * r
+        dy[i] = (j11 * deta - j12 * dxi) * r
+    return det
+
+
+@njit(cache=True)
+def _cayley(w):
+    """(c, s) of Q = [[c, s], [-s, c]] = (I - W/2)^-1 (I + W/2), W = [[0, w], [-w, 0]]."""
+    d = 1.0 / (1.0 + 0.25 * w * w)
+    return (1.0 - 0.25 * w * w) * d, w * d
+
+
+@njit(cache=True)
+def _grad(ue, dx, dy):
+    """Gradient of the increment (L_xx, L_xy, L_yx, L_yy), L_ab = d du_a / d x_b."""
+    gxx = 0.0
+    gxy = 0.0
+    gyx = 0.0
+    gyy = 0.0
+    for i in range(4):
+        gxx += ue[i, 0] * dx[i]
+        gxy += ue[i, 0] * dy[i]
+        gyx += ue[i, 1] * dx[i]
+        gyy += ue[i, 1] * dy[i]
+    return gxx, gxy, gyx, gyy
+
+
+@njit(cache=True)
+def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, deps, sold):
+    """Objective update of one point stress s (4,); returns (status, dwp, work density).
+
+    (gxx, gxy, gyx, gyy) is the mid-step gradient of du, (c, sn) the Cayley rotation of its
+    skew part.
+    """
+    # Rotate the stress, Q sig Q^T with Q = [[c, sn], [-sn, c]]
+    sxx = s[0]
+    syy = s[1]
+    sxy = s[2]
+    s[0] = c * c * sxx + 2.0 * c * sn * sxy + sn * sn * syy
+    s[1] = sn * sn * sxx - 2.0 * c * sn * sxy + c * c * syy
+    s[2] = c * sn * (syy - sxx) + (c * c - sn * sn) * sxy
+    # Material update with the symmetric part (plane strain)
+    deps[0] = gxx
+    deps[1] = gyy
+    deps[2] = 0.5 * (gxy + gyx)
+    deps[3] = 0.0
+    for k in range(4):
+        sold[k] = s[k]
+    status, dwp = material_update(p, s, deps, st)
+    # Stress power density, trapezoidal in time
+    w = 0.5 * ((sold[0] + s[0]) * deps[0] + (sold[1] + s[1]) * deps[1]
+               + 2.0 * (sold[2] + s[2]) * deps[2] + (sold[3] + s[3]) * deps[3])
+    return status, dwp, w
+
+
+@njit(cache=True)
+def _hg_gamma(xe, bx, by, g):
+    """Flanagan-Belytschko hourglass vector g (4,) from coordinates and centroid gradients."""
+    hx = 0.0
+    hy = 0.0
+    for i in range(4):
+        hx += HG[i] * xe[i, 0]
+        hy += HG[i] * xe[i, 1]
+    for i in range(4):
+        g[i] = 0.25 * (HG[i] - hx * bx[i] - hy * by[i])
+
+
+@njit(cache=True)
+def _hg_stiffness(p, a, bx, by):
+    """Hourglass stiffness k = (K + 4G/3) (B.B) / A per unit hg_coef (B = A b)."""
+    bb = 0.0
+    for i in range(4):
+        bb += bx[i] * bx[i] + by[i] * by[i]
+    return (p[BULK] + 4.0 * p[SHEAR] / 3.0) * a * bb
+
+
+@njit(cache=True)
+def _scatter(conn, e, fe, f):
+    """f -= fe for the 4 nodes of element e, in node order."""
+    for i in range(4):
+        n = conn[e, i]
+        f[n, 0] -= fe[i, 0]
+        f[n, 1] -= fe[i, 1]
+
+
+@njit(cache=True)
+def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
+                  f, ewint, ewp):
+    """One-point quads with FB stiffness hourglass control on elements [e0, e1).
+
+    Updates sig (ne,1,4), mstate, hgq (ne,2) in place; subtracts internal forces from f
+    (nn,2) element by element; adds stress + hourglass work to ewint and plastic work to ewp.
+    Returns -1, or the first element with non-positive area or a failed material update.
+    """
+    if sig.shape[1] != 1:
+        raise ValueError("q4_forces_1pt needs sig of shape (ne, 1, 4)")
+    # Scratch buffers, allocated once per call
+    xc = np.empty((4, 2))
+    xm = np.empty((4, 2))
+    ue = np.empty((4, 2))
+    fe = np.empty((4, 2))
+    bx = np.empty(4)
+    by = np.empty(4)
+    g = np.empty(4)
+    deps = np.empty(4)
+    sold = np.empty(4)
+    nost = np.zeros(0)
+    has_state = mstate.shape[0] > 0
+    has_hg = hgq.shape[0] > 0
+    for e in range(e0, e1):
+        p = mat_params[emat[e]]
+        _gather(x, du, conn, e, xc, xm, ue)
+        # Strain and spin increment from the mid-step mean gradient
+        am = _bvec(xm, bx, by)
+        if am <= 0.0:
+            return e
+        gxx, gxy, gyx, gyy = _grad(ue, bx, by)
+        c, sn = _cayley(0.5 * (gxy - gyx))
+        s = sig[e, 0]
+        if has_state:
+            status, dwp, w = _stress_point(p, s, mstate[e, 0], gxx, gxy, gyx, gyy, c, sn,
+                                           deps, sold)
+        else:
+            status, dwp, w = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn, deps, sold)
+        if status != 0:
+            return e
+        # Hourglass displacement increment at mid-step
+        dq0 = 0.0
+        dq1 = 0.0
+        if has_hg:
+            _hg_gamma(xm, bx, by, g)
+            for i in range(4):
+                dq0 += g[i] * ue[i, 0]
+                dq1 += g[i] * ue[i, 1]
+        # Current geometry: volume and gradients for the forces
+        a = _bvec(xc, bx, by)
+        if a <= 0.0:
+            return e
+        ewint[e] += w * a
+        ewp[e] += dwp * a
+        # Stress divergence forces f_I = A sig . b_I
+        for i in range(4):
+            fe[i, 0] = a * (s[0] * bx[i] + s[2] * by[i])
+            fe[i, 1] = a * (s[2] * bx[i] + s[1] * by[i])
+        # Rotate and increment the hourglass forces, add their work and nodal forces
+        if has_hg:
+            k = hg_coef * _hg_stiffness(p, a, bx, by)
+            q0 = c * hgq[e, 0] + sn * hgq[e, 1]
+            q1 = c * hgq[e, 1] - sn * hgq[e, 0]
+            n0 = q0 + k * dq0
+            n1 = q1 + k * dq1
+            hgq[e, 0] = n0
+            hgq[e, 1] = n1
+            ewint[e] += 0.5 * ((q0 + n0) * dq0 + (q1 + n1) * dq1)
+            _hg_gamma(xc, bx, by, g)
+            for i in range(4):
+                fe[i, 0] += n0 * g[i]
+                fe[i, 1] += n1 * g[i]
+        _scatter(conn, e, fe, f)
+    return -1
+
+
+@njit(cache=True)
+def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
+                  f, ewint, ewp):
+    """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hgq and hg_coef are ignored.
+
+    Updates sig (ne,4,4) and mstate per point; subtracts internal forces from f element by
+    element; adds stress work to ewint and plastic work to ewp (weights x current det J).
+    Returns -1, or the first element with a non-positive IP Jacobian or a failed material.
+    """
+    if sig.shape[1] != 4:
+        raise ValueError("q4_forces_2x2 needs sig of shape (ne, 4, 4)")
+    # Scratch buffers, allocated once per call
+    xc = np.empty((4, 2))
+    xm = np.empty((4, 2))
+    ue = np.empty((4, 2))
+    fe = np.empty((4, 2))
+    dx = np.empty(4)
+    dy = np.empty(4)
+    deps = np.empty(4)
+    sold = np.empty(4)
+    nost = np.zeros(0)
+    has_state = mstate.shape[0] > 0
+    for e in range(e0, e1):
+        p = mat_params[emat[e]]
+        _gather(x, du, conn, e, xc, xm, ue)
+        for i in range(4):
+            fe[i, 0] = 0.0
+            fe[i, 1] = 0.0
+        for ip in range(4):
+            xi = GP * XI[ip]
+            eta = GP * ETA[ip]
+            # Stress update with the mid-step gradients at this point
+            if _ip_grad(xm, xi, eta, dx, dy) <= 0.0:
+                return e
+            gxx, gxy, gyx, gyy = _grad(ue, dx, dy)
+            c, sn = _cayley(0.5 * (gxy - gyx))
+            s = sig[e, ip]
+            if has_state:
+                status, dwp, w = _stress_point(p, s, mstate[e, ip], gxx, gxy, gyx, gyy, c, sn,
+                                               deps, sold)
+            else:
+                status, dwp, w = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn,
+                                               deps, sold)
+            if status != 0:
+                return e
+            # Forces and work with the current gradients and volume
+            dv = _ip_grad(xc, xi, eta, dx, dy)
+            if dv <= 0.0:
+                return e
+            ewint[e] += w * dv
+            ewp[e] += dwp * dv
+            for i in range(4):
+                fe[i, 0] += dv * (s[0] * dx[i] + s[2] * dy[i])
+                fe[i, 1] += dv * (s[2] * dx[i] + s[1] * dy[i])
+        _scatter(conn, e, fe, f)
+    return -1
+
+
+@njit(cache=True)
+def q4_lumped_mass(x, conn, emat, mat_params, e0, e1, m):
+    """Add the row-sum lumped mass rho int N_I dA (2x2 Gauss, exact) of [e0, e1) to m (nn,).
+
+    Call once on the initial configuration: mass is then conserved by construction.
+    """
+    xc = np.empty((4, 2))
+    dx = np.empty(4)
+    dy = np.empty(4)
+    for e in range(e0, e1):
+        rho = mat_params[emat[e], RHO]
+        for i in range(4):
+            xc[i, 0] = x[conn[e, i], 0]
+            xc[i, 1] = x[conn[e, i], 1]
+        for ip in range(4):
+            xi = GP * XI[ip]
+            eta = GP * ETA[ip]
+            # Weight of node i at this point: rho N_i det J
+            det = _ip_grad(xc, xi, eta, dx, dy)
+            for i in range(4):
+                nn = 0.25 * (1.0 + XI[i] * xi) * (1.0 + ETA[i] * eta)
+                m[conn[e, i]] += rho * nn * det
+
+
+@njit(cache=True)
+def q4_strain_energy(x, conn, emat, mat_params, sig, hgq, hg_coef, e0, e1, out):
+    """out[e] = stored elastic energy of element e in [e0, e1) [J/m].
+
+    Sum over points of elastic_energy_density(sig) x point volume (current configuration);
+    for the 1-point rule with hgq.shape[0] > 0 and hg_coef > 0 also 0.5 Q.Q / k. A
+    non-positive area / Jacobian contributes its (non-positive) volume as is.
+    """
+    nip = sig.shape[1]
+    xc = np.empty((4, 2))
+    dx = np.empty(4)
+    dy = np.empty(4)
+    for e in range(e0, e1):
+        p = mat_params[emat[e]]
+        for i in range(4):
+            xc[i, 0] = x[conn[e, i], 0]
+            xc[i, 1] = x[conn[e, i], 1]
+        en = 0.0
+        if nip == 1:
+            # Centroid rule plus the hourglass spring energy
+            a = _bvec(xc, dx, dy)
+            en = elastic_energy_density(p, sig[e, 0]) * a
+            if hgq.shape[0] > 0 and hg_coef > 0.0 and a > 0.0:
+                k = hg_coef * _hg_stiffness(p, a, dx, dy)
+                en += 0.5 * (hgq[e, 0] * hgq[e, 0] + hgq[e, 1] * hgq[e, 1]) / k
+        else:
+            # 2x2 Gauss points
+            for ip in range(4):
+                dv = _ip_grad(xc, GP * XI[ip], GP * ETA[ip], dx, dy)
+                en += elastic_energy_density(p, sig[e, ip]) * dv
+        out[e] = en
+
+
+@njit(cache=True)
+def q4_jacobian_ratio(x, conn, e0, e1, out):
+    """out[e] = min / max of det J over the 4 corners of element e in [e0, e1).
+
+    Corner I has det J = ((x_{I+1} - x_I) x (x_{I-1} - x_I)) / 4. 1 for a parallelogram;
+    <= 0 means a corner is inverted (-1.0 when no corner is positive).
+    """
+    for e in range(e0, e1):
+        jmin = np.inf
+        jmax = -np.inf
+        for i in range(4):
+            n = conn[e, i]
+            nf = conn[e, (i + 1) % 4]
+            nb = conn[e, (i + 3) % 4]
+            # Cross product of the two edges leaving corner i
+            ax = x[nf, 0] - x[n, 0]
+            ay = x[nf, 1] - x[n, 1]
+            bx = x[nb, 0] - x[n, 0]
+            by = x[nb, 1] - x[n, 1]
+            d = 0.25 * (ax * by - ay * bx)
+            jmin = min(jmin, d)
+            jmax = max(jmax, d)
+        out[e] = jmin / jmax if jmax > 0.0 else -1.0

@@ -1,0 +1,434 @@
+"""Overlap geometry of two convex polygons, or of a polygon and a half-plane (report sec. 5).
+
+The overlap of element A (subject polygon P) and element B (clip polygon Q) is found by
+Sutherland-Hodgman clipping of P by the edge lines of Q. Every output vertex carries a tag row
+``tag[k, :]`` (int64, columns below):
+
+- ``T_KIND``: ``K_P`` an original vertex of P, ``K_Q`` a vertex of Q (or of the wall line),
+  ``K_X`` a crossing of a P edge with a Q edge (the two element boundaries cross there);
+- ``T_EP``: the P edge a crossing lies on (vertex index for ``K_P``, -1 for ``K_Q``);
+- ``T_EQ``: the Q edge (clip line) a crossing or Q vertex lies on (-1 for ``K_P``);
+- ``T_SRC``: the boundary the polygon edge from vertex k to k+1 lies on: P edge i -> i >= 0,
+  Q edge j -> -1 - j.
+
+``T_SRC`` is what makes the contact normal robust: the sum over overlap edges lying on A's boundary
+of (outward normal x length) points from A into B, whatever the shape of the overlap (for the usual
+lens with two crossings c1 -> c2 it is exactly the chord rotated clockwise).
+
+Geometry convention: polygons are counter-clockwise; the outward normal of a CCW edge (dx, dy) is
+(dy, -dx) ("rotated clockwise"). A wall is the half-plane {p : n.(p - p0) < 0} behind the point p0
+with the unit normal n pointing out of the wall into the domain (towards the grains).
+
+The broad phase at the end (element bounding boxes, candidate element pairs) feeds the clipping.
+"""
+
+import numpy as np
+from numba import njit
+
+# Capacity of the clip buffers: P (4) clipped by 4 lines has <= 8 vertices, plus degenerate slack
+MAXV = 16
+NTAG = 4
+T_KIND = 0
+T_EP = 1
+T_EQ = 2
+T_SRC = 3
+K_P = 0
+K_Q = 1
+K_X = 2
+
+# Status codes of quad_overlap / halfplane_overlap
+OV_OK = 0  # positive overlap with a well-defined chord
+OV_NONE = 1  # no overlap (area zero or a rounding-level sliver)
+OV_INSIDE = 2  # positive area but < 2 distinct crossings: one element inside the other (guard)
+OV_OVERFLOW = 3  # clip buffers too small (guard, cannot happen for convex quads)
+
+# Overlaps below this fraction of the squared bbox extent of A are rounding slivers: no contact
+SLIVER = 1e-14
+
+
+@njit(cache=True)
+def alloc_clip_buffers():
+    """Return (ox, oy, otag, wx, wy, wtag): output and work buffers for clip_convex."""
+    ox = np.zeros(MAXV)
+    oy = np.zeros(MAXV)
+    otag = np.zeros((MAXV, NTAG), dtype=np.int64)
+    wx = np.zeros(MAXV)
+    wy = np.zeros(MAXV)
+    wtag = np.zeros((MAXV, NTAG), dtype=np.int64)
+    return ox, oy, otag, wx, wy, wtag
+
+
+@njit(cache=True)
+def _put(ox, oy, otag, k, x, y, kind, ep, eq, src):
+    """Write vertex k of an output polygon; return k + 1, or -1 when the buffer is full."""
+    if k < 0 or k >= ox.shape[0]:
+        return -1
+    ox[k] = x
+    oy[k] = y
+    otag[k, T_KIND] = kind
+    otag[k, T_EP] = ep
+    otag[k, T_EQ] = eq
+    otag[k, T_SRC] = src
+    return k + 1
+
+
+@njit(cache=True)
+def clip_halfplane(ix, iy, itag, nin, x0, y0, nx, ny, line, ox, oy, otag):
+    """One Sutherland-Hodgman step: keep the part of polygon (ix, iy)[:nin] where
+    nx*(x - x0) + ny*(y - y0) <= 0. ``line`` is the clip-line id stored in the tags (Q edge index).
+
+    Returns the output vertex count (0 when nothing is left, -1 on buffer overflow).
+    """
+    k = 0
+    if nin == 0:
+        return 0
+    # Walk the edges S -> E of the input polygon, starting with the closing edge
+    js = nin - 1
+    ss = nx * (ix[js] - x0) + ny * (iy[js] - y0)
+    for je in range(nin):
+        se = nx * (ix[je] - x0) + ny * (iy[je] - y0)
+        src = itag[js, T_SRC]
+        # A crossing of a P edge with this line is a boundary crossing, else it is a Q vertex
+        if src >= 0:
+            kind = K_X
+            ep = src
+        else:
+            kind = K_Q
+            ep = -1
+        if se <= 0.0:
+            if ss > 0.0:
+                # Entering: intersection point, then E; the edge out of it continues S -> E
+                t = ss / (ss - se)
+                xi = ix[js] + t * (ix[je] - ix[js])
+                yi = iy[js] + t * (iy[je] - iy[js])
+                k = _put(ox, oy, otag, k, xi, yi, kind, ep, line, src)
+            k = _put(
+                ox,
+                oy,
+                otag,
+                k,
+                ix[je],
+                iy[je],
+                itag[je, T_KIND],
+                itag[je, T_EP],
+                itag[je, T_EQ],
+                itag[je, T_SRC],
+            )
+        elif ss <= 0.0:
+            # Leaving: intersection point; the edge out of it runs along the clip line
+            t = ss / (ss - se)
+            xi = ix[js] + t * (ix[je] - ix[js])
+            yi = iy[js] + t * (iy[je] - iy[js])
+            k = _put(ox, oy, otag, k, xi, yi, kind, ep, line, -1 - line)
+        if k < 0:
+            return -1
+        js = je
+        ss = se
+    return k
+
+
+@njit(cache=True)
+def _load_subject(px, py, n, ox, oy, otag):
+    """Copy subject polygon P into a tagged buffer (vertex i, edge i -> i+1 has source i)."""
+    for i in range(n):
+        ox[i] = px[i]
+        oy[i] = py[i]
+        otag[i, T_KIND] = K_P
+        otag[i, T_EP] = i
+        otag[i, T_EQ] = -1
+        otag[i, T_SRC] = i
+
+
+@njit(cache=True)
+def clip_convex(px, py, n, qx, qy, m, ox, oy, otag, wx, wy, wtag):
+    """Intersection of convex CCW polygons P = (px, py)[:n] and Q = (qx, qy)[:m].
+
+    The tagged result (see module docstring) is left in (ox, oy, otag); (wx, wy, wtag) are work
+    buffers of the same size. Returns the vertex count (0: empty, -1: buffer overflow).
+    """
+    if n > ox.shape[0]:
+        return -1
+    # Ping-pong between the two buffers; start so that the last step writes into ox
+    if m % 2 == 0:
+        _load_subject(px, py, n, ox, oy, otag)
+    else:
+        _load_subject(px, py, n, wx, wy, wtag)
+    k = n
+    for j in range(m):
+        j1 = (j + 1) % m
+        # Outward normal of CCW edge j of Q (not normalised: only signs and ratios matter)
+        nx = qy[j1] - qy[j]
+        ny = qx[j] - qx[j1]
+        if (m - j) % 2 == 0:
+            k = clip_halfplane(ox, oy, otag, k, qx[j], qy[j], nx, ny, j, wx, wy, wtag)
+        else:
+            k = clip_halfplane(wx, wy, wtag, k, qx[j], qy[j], nx, ny, j, ox, oy, otag)
+        if k <= 0:
+            return k
+    return k
+
+
+@njit(cache=True)
+def polygon_area_centroid(x, y, k):
+    """Area and centroid of the polygon (x, y)[:k] (CCW positive), fanned from vertex 0."""
+    if k < 3:
+        return 0.0, 0.0, 0.0
+    a2 = 0.0
+    sx = 0.0
+    sy = 0.0
+    # Triangles (v0, vi, vi+1) in coordinates relative to v0 (less cancellation)
+    for i in range(1, k - 1):
+        ax = x[i] - x[0]
+        ay = y[i] - y[0]
+        bx = x[i + 1] - x[0]
+        by = y[i + 1] - y[0]
+        c = ax * by - ay * bx
+        a2 += c
+        sx += c * (ax + bx)
+        sy += c * (ay + by)
+    if a2 == 0.0:
+        return 0.0, x[0], y[0]
+    return 0.5 * a2, x[0] + sx / (3.0 * a2), y[0] + sy / (3.0 * a2)
+
+
+@njit(cache=True)
+def boundary_normal_sum(ox, oy, otag, k):
+    """Sum over the overlap edges lying on P's boundary of (outward normal x length).
+
+    It points from P into Q; for two crossings c1 -> c2 (CCW along P's part) it is exactly
+    (c2 - c1) rotated clockwise, i.e. the chord's normal scaled by the chord length.
+    """
+    sx = 0.0
+    sy = 0.0
+    for i in range(k):
+        if otag[i, T_SRC] >= 0:
+            i1 = (i + 1) % k
+            sx += oy[i1] - oy[i]
+            sy -= ox[i1] - ox[i]
+    return sx, sy
+
+
+@njit(cache=True)
+def crossing_chord(ox, oy, otag, k):
+    """Chord of the overlap: the two boundary crossing points farthest apart.
+
+    Returns (n_cross, c1x, c1y, c2x, c2y), ordered so that (c2 - c1) rotated clockwise points
+    from P into Q (sign taken from boundary_normal_sum; with exactly two crossings that sum *is*
+    the rotated chord). With fewer than 2 distinct crossings the chord has zero length.
+    """
+    ncr = 0
+    c1x = 0.0
+    c1y = 0.0
+    c2x = 0.0
+    c2y = 0.0
+    best = -1.0
+    # Farthest pair among the crossing vertices; the first pair found wins ties
+    for i in range(k):
+        if otag[i, T_KIND] != K_X:
+            continue
+        ncr += 1
+        for j in range(i + 1, k):
+            if otag[j, T_KIND] != K_X:
+                continue
+            dx = ox[j] - ox[i]
+            dy = oy[j] - oy[i]
+            d2 = dx * dx + dy * dy
+            if d2 > best:
+                best = d2
+                c1x = ox[i]
+                c1y = oy[i]
+                c2x = ox[j]
+                c2y = oy[j]
+    # Orient the chord so that its clockwise normal points from P into Q
+    sx, sy = boundary_normal_sum(ox, oy, otag, k)
+    if (c2y - c1y) * sx - (c2x - c1x) * sy < 0.0:
+        c1x, c1y, c2x, c2y = c2x, c2y, c1x, c1y
+    return ncr, c1x, c1y, c2x, c2y
+
+
+@njit(cache=True)
+def _classify(ox, oy, otag, k, scale2):
+    """Area, centroid and chord of a clipped polygon, with the status code of quad_overlap."""
+    if k < 0:
+        return OV_OVERFLOW, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    area, cx, cy = polygon_area_centroid(ox, oy, k)
+    if area <= SLIVER * scale2:
+        return OV_NONE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    ncr, c1x, c1y, c2x, c2y = crossing_chord(ox, oy, otag, k)
+    status = OV_OK
+    if ncr < 2 or (c1x == c2x and c1y == c2y):
+        status = OV_INSIDE
+    return status, area, cx, cy, c1x, c1y, c2x, c2y
+
+
+@njit(cache=True)
+def _bbox_scale2(xa):
+    """Squared largest bbox extent of the quad xa (4, 2)."""
+    ex = max(xa[0, 0], xa[1, 0], xa[2, 0], xa[3, 0]) - min(xa[0, 0], xa[1, 0], xa[2, 0], xa[3, 0])
+    ey = max(xa[0, 1], xa[1, 1], xa[2, 1], xa[3, 1]) - min(xa[0, 1], xa[1, 1], xa[2, 1], xa[3, 1])
+    e = max(ex, ey)
+    return e * e
+
+
+@njit(cache=True)
+def quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag):
+    """Overlap of convex CCW quads xa (4, 2) [element A] and xb (4, 2) [element B].
+
+    Returns (status, area, cx, cy, c1x, c1y, c2x, c2y, k): overlap area, its centroid, the chord
+    endpoints (the two crossings of the element boundaries farthest apart) oriented so that the
+    chord's clockwise normal (c2y - c1y, c1x - c2x)/|c2 - c1| points from A into B, and the vertex
+    count k of the tagged overlap polygon left in (ox, oy, otag). Status: OV_OK; OV_NONE (area 0,
+    or a sliver below SLIVER * extent(A)^2: no contact); OV_INSIDE (positive area but fewer than
+    2 distinct crossings: one element contains the other, the caller treats it as an error);
+    OV_OVERFLOW.
+    """
+    k = clip_convex(xa[:, 0], xa[:, 1], 4, xb[:, 0], xb[:, 1], 4, ox, oy, otag, wx, wy, wtag)
+    st, area, cx, cy, c1x, c1y, c2x, c2y = _classify(ox, oy, otag, k, _bbox_scale2(xa))
+    return st, area, cx, cy, c1x, c1y, c2x, c2y, k
+
+
+@njit(cache=True)
+def halfplane_overlap(xa, p0, n, ox, oy, otag, wx, wy, wtag):
+    """Overlap of the convex CCW quad xa (4, 2) with the wall {p : n.(p - p0) < 0}.
+
+    n is the wall's unit normal pointing out of the wall into the domain. Returns the same tuple
+    as quad_overlap plus the vertex count k; the chord lies on the wall line and is oriented so
+    that its clockwise normal is -n (from the element into the wall). OV_INSIDE means the whole
+    element is behind the wall. Crossings carry T_EQ = 0 (the wall line).
+    """
+    _load_subject(xa[:, 0], xa[:, 1], 4, wx, wy, wtag)
+    k = clip_halfplane(wx, wy, wtag, 4, p0[0], p0[1], n[0], n[1], 0, ox, oy, otag)
+    st, area, cx, cy, c1x, c1y, c2x, c2y = _classify(ox, oy, otag, k, _bbox_scale2(xa))
+    return st, area, cx, cy, c1x, c1y, c2x, c2y, k
+
+
+# ---- Broad phase: element bounding boxes and candidate pairs ----
+
+
+@njit(cache=True)
+def element_bboxes(x, conn, e0, e1, out):
+    """out[e] = (xmin, ymin, xmax, ymax) of element e's nodes for e in [e0, e1)."""
+    for e in range(e0, e1):
+        n0 = conn[e, 0]
+        out[e, 0] = x[n0, 0]
+        out[e, 1] = x[n0, 1]
+        out[e, 2] = x[n0, 0]
+        out[e, 3] = x[n0, 1]
+        for k in range(1, conn.shape[1]):
+            nk = conn[e, k]
+            out[e, 0] = min(out[e, 0], x[nk, 0])
+            out[e, 1] = min(out[e, 1], x[nk, 1])
+            out[e, 2] = max(out[e, 2], x[nk, 0])
+            out[e, 3] = max(out[e, 3], x[nk, 1])
+
+
+@njit(cache=True)
+def boxes_near(bi, bj, skin):
+    """True when boxes bi, bj (xmin, ymin, xmax, ymax) are at most skin apart in x and in y."""
+    return (
+        bi[0] - bj[2] <= skin
+        and bj[0] - bi[2] <= skin
+        and bi[1] - bj[3] <= skin
+        and bj[1] - bi[3] <= skin
+    )
+
+
+@njit(cache=True)
+def _on_boundary(ebnd, e):
+    """True when element e has at least one grain-boundary edge."""
+    for k in range(ebnd.shape[1]):
+        if ebnd[e, k] != 0:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _emit(out, n, a, b, egid, eloc):
+    """Store pair n as (lower global key, higher global key) if it fits; return n + 1."""
+    if egid[a] > egid[b] or (egid[a] == egid[b] and eloc[a] > eloc[b]):
+        a, b = b, a
+    if n < out.shape[0]:
+        out[n, 0] = a
+        out[n, 1] = b
+    return n + 1
+
+
+@njit(cache=True)
+def pairs_from_bboxes(bbox, ebnd, egid, eloc, e0, e1, skin, out):
+    """Brute force reference: all pairs of boundary elements in [e0, e1) of different bodies
+    whose bboxes are within skin (boxes_near), oriented lower global key first, into out (cap, 2).
+
+    Returns the number of pairs found; only the first cap are written (call again if larger).
+    """
+    n = 0
+    for i in range(e0, e1):
+        if not _on_boundary(ebnd, i):
+            continue
+        for j in range(i + 1, e1):
+            if egid[j] != egid[i] and _on_boundary(ebnd, j) and boxes_near(bbox[i], bbox[j], skin):
+                n = _emit(out, n, i, j, egid, eloc)
+    return n
+
+
+@njit(cache=True)
+def _near_list(bbox, ebnd, e0, e1, box, skin, lst):
+    """Boundary elements of [e0, e1) within skin of box, into lst; return their count."""
+    c = 0
+    for e in range(e0, e1):
+        if _on_boundary(ebnd, e) and boxes_near(bbox[e], box, skin):
+            lst[c] = e
+            c += 1
+    return c
+
+
+@njit(cache=True)
+def _body_box(bbox, ebnd, e0, e1, box):
+    """Union of the bboxes of the boundary elements of [e0, e1) into box."""
+    box[0] = np.inf
+    box[1] = np.inf
+    box[2] = -np.inf
+    box[3] = -np.inf
+    for e in range(e0, e1):
+        if _on_boundary(ebnd, e):
+            box[0] = min(box[0], bbox[e, 0])
+            box[1] = min(box[1], bbox[e, 1])
+            box[2] = max(box[2], bbox[e, 2])
+            box[3] = max(box[3], bbox[e, 3])
+
+
+@njit(cache=True)
+def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, out):
+    """Boundary-element pairs of the candidate body pairs bpairs (nb, 2) whose bboxes are within
+    skin (boxes_near). Body i owns elements [body_e0[i], body_e1[i]). Pairs come out in body-pair
+    order, then element order, oriented lower global key first, into out (cap, 2); returns the
+    number found (only the first cap are written). Same set as pairs_from_bboxes.
+    """
+    big = 1
+    for q in range(bpairs.shape[0]):
+        for s in range(2):
+            big = max(big, body_e1[bpairs[q, s]] - body_e0[bpairs[q, s]])
+    la = np.empty(big, dtype=np.int64)
+    lb = np.empty(big, dtype=np.int64)
+    ba = np.empty(4)
+    bb = np.empty(4)
+    n = 0
+    for q in range(bpairs.shape[0]):
+        i = bpairs[q, 0]
+        j = bpairs[q, 1]
+        if body_e1[i] <= body_e0[i] or body_e1[j] <= body_e0[j]:
+            continue
+        if egid[body_e0[i]] == egid[body_e0[j]]:
+            continue
+        if egid[body_e0[i]] > egid[body_e0[j]]:
+            i, j = j, i
+        # Bounding box of each body's boundary elements (empty box when it has none)
+        _body_box(bbox, ebnd, body_e0[i], body_e1[i], ba)
+        _body_box(bbox, ebnd, body_e0[j], body_e1[j], bb)
+        # Boundary elements of each body near the other body, then all their pairs
+        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], bb, skin, la)
+        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], ba, skin, lb)
+        for u in range(na):
+            for v in range(nb):
+                if boxes_near(bbox[la[u]], bbox[lb[v]], skin):
+                    n = _emit(out, n, la[u], lb[v], egid, eloc)
+    return n

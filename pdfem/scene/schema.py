@@ -1,0 +1,291 @@
+"""The scene schema as data: one :class:`Key` per scene key, one :class:`Section` per table.
+
+Everything that knows a key's type, default, range, units or meaning lives here; the
+checker (:mod:`pdfem.scene.values`), the cross-key rules (:mod:`pdfem.scene.validate`) and
+the reference documentation (:mod:`pdfem.scene.reference`) read these tables. Adding a key
+is one line in the right table (plus a rule in ``validate`` if it depends on other keys).
+"""
+
+import math
+from dataclasses import dataclass, field
+
+
+class _Marker:
+    """A named sentinel for defaults that are not values."""
+
+    def __init__(self, name):
+        self.name = name
+
+    def __repr__(self):
+        return self.name
+
+
+# The key must be given
+REQUIRED = _Marker("REQUIRED")
+# The key may be absent and stays absent in the resolved scene
+OPTIONAL = _Marker("OPTIONAL")
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A default computed from other keys by :mod:`pdfem.scene.validate`; ``text`` says how."""
+
+    text: str
+
+
+@dataclass(frozen=True)
+class Key:
+    """One scene key: its kind, default and range, with the documentation of each.
+
+    kind: ``float``, ``int``, ``str``, ``vec2`` ([x, y]), ``box`` ([x0, y0, x1, y1]) or
+    ``strlist``. ``lo``/``hi`` bound numbers (every component of a vector), open when
+    ``lo_open``/``hi_open``; ``choices`` restricts strings (each element of a strlist).
+    ``allow_inf`` lets +inf through the finiteness check. ``why`` is appended to a range error.
+    """
+
+    kind: str
+    default: object = REQUIRED
+    doc: str = ""
+    units: str = ""
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    hi_open: bool = False
+    choices: tuple = ()
+    allow_inf: bool = False
+    why: str = ""
+
+    def range_text(self):
+        """The allowed range in words: ``> 0``, ``[0, 0.5]``, ``one of "a", "b"``."""
+        if self.choices:
+            return "one of " + ", ".join(f'"{c}"' for c in self.choices)
+        lo, hi = self.lo, self.hi
+        if lo is not None and hi is not None:
+            left, right = "(" if self.lo_open else "[", ")" if self.hi_open else "]"
+            return f"{left}{_num(lo)}, {_num(hi)}{right}"
+        if lo is not None:
+            return f"{'>' if self.lo_open else '>='} {_num(lo)}"
+        if hi is not None:
+            return f"{'<' if self.hi_open else '<='} {_num(hi)}"
+        return ""
+
+
+def _num(x):
+    return repr(int(x)) if float(x).is_integer() and abs(x) < 1e15 else repr(x)
+
+
+def _pos(kind="float", default=REQUIRED, doc="", units="", **kw):
+    """A number > 0."""
+    return Key(kind, default, doc, units, lo=0.0, lo_open=True, **kw)
+
+
+def _nonneg(kind="float", default=REQUIRED, doc="", units="", **kw):
+    """A number >= 0."""
+    return Key(kind, default, doc, units, lo=0.0, **kw)
+
+
+@dataclass(frozen=True)
+class Section:
+    """A scene table. form: ``table``, ``array`` ([[name]]) or ``named`` ([name.NAME])."""
+
+    name: str
+    form: str
+    doc: str
+    keys: dict = field(default_factory=dict)
+    required: bool = False
+
+
+# Names of materials and blocks
+NAME_PATTERN = r"[A-Za-z_][A-Za-z0-9_-]*"
+SIDES = ("left", "right", "bottom", "top")
+OUTPUT_FIELDS = ("x", "v", "stress")
+
+# [domain]
+DOMAIN = {
+    "box": Key("box", REQUIRED, "domain rectangle [xmin, ymin, xmax, ymax]; xmax > xmin, "
+               "ymax > ymin", "m"),
+    "cell_size": _nonneg("float", 0.0, "contact/decomposition cell size; 0 = auto = largest "
+                         "grain diameter 2 max(a, b) + skin; if given it must be at least that",
+                         "m"),
+    "skin": _nonneg("float", 0.0, "neighbour-list skin: ghosts and contact candidates are "
+                    "rebuilt when a node has moved skin/2; 0 = auto = 0.1 x smallest grain "
+                    "minor diameter 2 min(a, b)", "m"),
+    "partition": Key("str", "rcb", "cell-to-rank assignment: recursive coordinate bisection "
+                     "or strips", choices=("rcb", "strips")),
+    "rebalance": _nonneg("float", 0.0, "re-partition when the load imbalance max/mean exceeds "
+                         "this; 0 = never, otherwise >= 1"),
+}
+
+# [time]
+TIME = {
+    "end": _pos("float", REQUIRED, "end time of the run", "s"),
+    "safety": Key("float", 0.5, "time step = safety x stable (critical) time step", lo=0.0,
+                  lo_open=True, hi=1.0, why="a larger step is above the stable limit"),
+    "dt_max": _pos("float", math.inf, "upper bound of the time step (inf = none)", "s",
+                   allow_inf=True),
+    "dt_min": _nonneg("float", 0.0, "the run stops with an error when the stable time step "
+                      "falls below this; must be < dt_max", "s"),
+    "max_steps": _nonneg("int", 0, "stop after this many steps; 0 = no limit"),
+}
+
+# [element]
+ELEMENT = {
+    "rule": Key("str", "1pt", "quadrature: one point with hourglass control, or 2x2 Gauss",
+                choices=("1pt", "2x2")),
+    "hourglass": Key("float", 0.05, "hourglass stiffness coefficient (rule 1pt)", lo=0.0,
+                     hi=0.5),
+    "level": Key("int", 1, "grain mesh refinement: each grain has 6 level^2 quads", lo=1,
+                 hi=10),
+}
+
+# [gravity]
+GRAVITY = {"g": Key("vec2", [0.0, -9.81], "gravitational acceleration [gx, gy]", "m/s^2")}
+
+# [damping]
+DAMPING = {"gamma": _nonneg("float", REQUIRED, "mass-proportional damping D = gamma M", "1/s")}
+
+# [materials.NAME]: keys of every model
+MATERIAL_COMMON = {
+    "model": Key("str", "elastic", "material model", choices=("elastic", "cap")),
+    "density": _pos("float", REQUIRED, "mass density", "kg/m^3"),
+    "bulk": _pos("float", REQUIRED, "bulk modulus K", "Pa"),
+    "shear": _pos("float", REQUIRED, "shear modulus G", "Pa"),
+}
+
+# [materials.NAME] with model = "cap": Sandler-Rubin cap plasticity (tension positive)
+CAP = {
+    "A": _pos("float", REQUIRED, "failure envelope sqrt(J2) = A - C exp(B I1): constant A",
+              "Pa"),
+    "B": _nonneg("float", REQUIRED, "failure envelope exponent B", "1/Pa"),
+    "C": _nonneg("float", REQUIRED, "failure envelope constant C; must be < A", "Pa"),
+    "D": _pos("float", REQUIRED, "hardening rate D of the cap", "1/Pa"),
+    "R": _pos("float", REQUIRED, "cap aspect ratio R"),
+    "W": Key("float", REQUIRED, "maximum plastic volumetric compaction W", lo=0.0, hi=1.0,
+             lo_open=True, hi_open=True),
+    "kappa0": Key("float", REQUIRED, "initial cap position: I1 where the cap meets the "
+                  "envelope (compression negative)", "Pa"),
+    "tension_cutoff": _nonneg("float", Derived("ln(A/C)/B if B > 0 and C > 0, else 0"),
+                              "tension cut-off on I1", "Pa"),
+    "tol": _pos("float", 1e-8, "relative yield-surface tolerance of the return mapping"),
+}
+
+# Model name -> the keys it adds to MATERIAL_COMMON
+MATERIAL_MODELS = {"elastic": {}, "cap": CAP}
+
+# [[grains]]
+GRAIN = {
+    "center": Key("vec2", REQUIRED, "centre [x, y]", "m"),
+    "axes": _pos("vec2", REQUIRED, "semi-axes [a, b]; a along the rotated x axis", "m"),
+    "angle": Key("float", 0.0, "rotation of the a axis from the x axis, counter-clockwise",
+                 "rad"),
+    "material": Key("str", REQUIRED, "material name (a [materials.NAME] table)"),
+    "velocity": Key("vec2", [0.0, 0.0], "initial velocity [vx, vy]", "m/s"),
+}
+
+# [grains_file]
+GRAINS_FILE = {
+    "path": Key("str", REQUIRED, "CSV (header line; columns x, y, a, b, optional angle, vx, "
+                "vy, material) or .npz with arrays of those names; relative to the scene "
+                "file's directory (stored absolute in the resolved scene)"),
+    "material": Key("str", OPTIONAL, "material of rows without a material column/value; "
+                    "required unless every row names one"),
+    "velocity": Key("vec2", [0.0, 0.0], "velocity of rows without vx/vy", "m/s"),
+}
+
+# [[blocks]]
+BLOCK = {
+    "name": Key("str", REQUIRED, "unique block name (letters, digits, _ and -)"),
+    "box": Key("box", REQUIRED, "rectangle [x0, y0, x1, y1]; x1 > x0, y1 > y0", "m"),
+    "nx": Key("int", 3, "elements along x", lo=1),
+    "ny": Key("int", 1, "elements along y", lo=1),
+    "material": Key("str", REQUIRED, "material name"),
+    "velocity": Key("vec2", [0.0, 0.0], "initial velocity [vx, vy]", "m/s"),
+}
+
+# [[bc]]
+BC = {
+    "body": Key("str", OPTIONAL, "block name; give either body or wall"),
+    "nodes": Key("str", Derived('"all" (with body)'), "which nodes of the block (only with "
+                 "body)", choices=SIDES + ("all",)),
+    "wall": Key("str", OPTIONAL, "every node (of any body) on this domain wall at t=0, "
+                "within 1e-9 of the box size", choices=SIDES),
+    "type": Key("str", REQUIRED, "fixed: both components zero; roller: one component zero; "
+                "velocity: prescribed velocity", choices=("fixed", "roller", "velocity")),
+    "dof": Key("str", Derived('fixed: "xy"; roller: normal of the side (left/right "x", '
+                              'bottom/top "y"), required with nodes = "all"; velocity: "xy"'),
+               "constrained components", choices=("x", "y", "xy")),
+    "velocity": Key("vec2", OPTIONAL, "prescribed velocity [vx, vy]; required for (and only "
+                    "for) type velocity", "m/s"),
+}
+
+# [walls]
+WALL_KINDS = ("none", "frictionless", "frictional")
+WALLS = {side: Key("str", "none", f"contact wall at the {side} side of the domain box",
+                   choices=WALL_KINDS) for side in SIDES}
+WALLS["friction"] = _nonneg("float", 0.0, "Coulomb friction coefficient of frictional walls; "
+                            "must be > 0 when a wall is frictional")
+
+# [contact]
+CONTACT = {
+    "kn0": _pos("float", REQUIRED, "normal penalty stiffness", "Pa/m"),
+    "delta_max": _pos("float", REQUIRED, "largest admissible overlap (a deeper one stops the "
+                      "run)", "m"),
+    "ks": _nonneg("float", Derived("0.5 kn0"), "tangential penalty stiffness", "Pa/m"),
+    "friction": _nonneg("float", 0.0, "Coulomb friction coefficient"),
+}
+
+# [contact.pairs."mat1:mat2"]: per material pair overrides
+CONTACT_PAIR = {
+    "kn0": _pos("float", Derived("contact.kn0"), "normal penalty stiffness", "Pa/m"),
+    "delta_max": _pos("float", Derived("contact.delta_max"), "largest admissible overlap", "m"),
+    "ks": _nonneg("float", Derived("contact.ks if given, else 0.5 kn0 of the pair"),
+                  "tangential penalty stiffness", "Pa/m"),
+    "friction": _nonneg("float", Derived("contact.friction"), "Coulomb friction coefficient"),
+}
+
+# [output]
+OUTPUT = {
+    "path": Key("str", "pdfem-run.h5", "output HDF5 file, relative to the current directory; "
+                "its directory must exist and be writable"),
+    "interval": _pos("float", Derived("time.end / 20"), "time between output frames", "s"),
+    "fields": Key("strlist", list(OUTPUT_FIELDS), "node/element fields written per frame",
+                  choices=OUTPUT_FIELDS),
+    "energy_interval": _pos("float", Derived("interval / 10"), "time between energy-balance "
+                            "samples", "s"),
+}
+
+# [run]
+RUN = {"seed": _nonneg("int", 0, "seed of any randomness (reserved; runs are reproducible)")}
+
+# Every top-level table, in the order of the resolved scene
+SECTIONS = [
+    Section("domain", "table", "The computational box and its cell grid (the contact grid is "
+            "the domain decomposition).", DOMAIN, required=True),
+    Section("time", "table", "Explicit central-difference time stepping.", TIME, required=True),
+    Section("element", "table", "The 4-node quadrilateral elements of every body.", ELEMENT),
+    Section("gravity", "table", "Body force m g. Active only when the table is present.",
+            GRAVITY),
+    Section("damping", "table", "Mass-proportional damping. Active only when the table is "
+            "present.", DAMPING),
+    Section("materials", "named", "One table per material, `[materials.NAME]`, NAME matching "
+            f"`{NAME_PATTERN}`; at least one. Material ids follow the order of the tables.",
+            MATERIAL_COMMON, required=True),
+    Section("grains", "array", "Elliptic grains, `[[grains]]`, one table each. Grains get ids "
+            "0, 1, ... in scene order: these first, then the rows of grains_file.", GRAIN),
+    Section("grains_file", "table", "Grains read from a file (alternative or in addition to "
+            "[[grains]]).", GRAINS_FILE),
+    Section("blocks", "array", "Rectangular bodies (walls, hammer, chamber bottom), "
+            "`[[blocks]]`, meshed nx by ny.", BLOCK),
+    Section("bc", "array", "Boundary conditions, `[[bc]]`, on block nodes or on every node on a "
+            "domain wall.", BC),
+    Section("walls", "table", "Contact walls on the sides of the domain box.", WALLS),
+    Section("contact", "table", "Penalty contact between bodies. Active only when the table is "
+            "present; friction is active when any friction > 0. Sub-tables "
+            '`[contact.pairs."mat1:mat2"]` override kn0, delta_max, ks, friction per material '
+            "pair.", CONTACT),
+    Section("output", "table", "The HDF5 output file.", OUTPUT),
+    Section("run", "table", "Run control.", RUN),
+]
+
+# Tables that appear in the resolved scene only when given (their presence is the effect)
+PRESENCE_TABLES = ("gravity", "damping", "grains_file", "walls", "contact")

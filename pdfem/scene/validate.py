@@ -1,0 +1,299 @@
+"""From a parsed TOML document to the resolved scene: every table checked, defaults filled.
+
+:func:`resolve` checks the tables one by one against :mod:`pdfem.scene.schema`, applies the
+rules that tie keys together (cap envelope, boundary conditions, derived defaults) and
+finally the geometry at t=0 (:mod:`pdfem.scene.geometry`). Any problem raises
+:class:`~pdfem.scene.values.SceneError` naming the key path.
+"""
+
+import math
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from pdfem.scene import geometry as geo
+from pdfem.scene import schema as S
+from pdfem.scene.grains_file import read_grains_file
+from pdfem.scene.values import SceneError, array_of_tables, check_table, join, show, table
+
+_NAME = re.compile(S.NAME_PATTERN)
+
+
+def resolve(doc, base_dir):
+    """Check ``doc`` (a dict from TOML).
+
+    Returns (resolved dict, grain arrays, material name -> id, grain label function).
+    """
+    doc = table(doc, "", "a TOML table")
+    known = [sec.name for sec in S.SECTIONS]
+    for name in doc:
+        if name not in known:
+            raise SceneError(join("", name), f"unknown table (known: {', '.join(known)})")
+    secs = {sec.name: sec for sec in S.SECTIONS}
+    for name, sec in secs.items():
+        if sec.required and name not in doc:
+            raise SceneError(name, f"required table [{name}] missing")
+    r = {}
+    # Plain tables
+    for name in ("domain", "time", "element", "gravity", "damping"):
+        if name in doc or name not in S.PRESENCE_TABLES:
+            r[name] = check_table(doc.get(name, {}), secs[name].keys, name)
+    _time_rules(r["time"])
+    _domain_rules(r["domain"])
+    r["materials"] = _materials(doc["materials"])
+    mat_ids = {name: i for i, name in enumerate(r["materials"])}
+    # Bodies and conditions
+    r["grains"] = [_named_material(check_table(g, S.GRAIN, f"grains[{i}]"), mat_ids,
+                                   f"grains[{i}]")
+                   for i, g in enumerate(array_of_tables(doc.get("grains", []), "grains"))]
+    rows = None
+    if "grains_file" in doc:
+        gf = check_table(doc["grains_file"], S.GRAINS_FILE, "grains_file")
+        if "material" in gf:
+            _named_material(gf, mat_ids, "grains_file")
+        rows = read_grains_file(gf, base_dir, mat_ids)
+        gf["path"] = str(Path(base_dir, gf["path"]).resolve())
+        r["grains_file"] = gf
+    r["blocks"] = _blocks(doc.get("blocks", []), mat_ids)
+    r["bc"] = _bcs(doc.get("bc", []), [b["name"] for b in r["blocks"]])
+    # Contact and walls
+    if "walls" in doc:
+        r["walls"] = check_table(doc["walls"], S.WALLS, "walls")
+        if r["walls"]["friction"] == 0.0 and "frictional" in r["walls"].values():
+            raise SceneError("walls.friction", "must be > 0 when a wall is frictional")
+    if "contact" in doc:
+        r["contact"] = _contact(doc["contact"], mat_ids)
+    r["output"] = _output(doc.get("output", {}), r["time"]["end"])
+    r["run"] = check_table(doc.get("run", {}), S.RUN, "run")
+    # Geometry at t=0
+    grains, label = _grain_arrays(r["grains"], rows, mat_ids)
+    _geometry(r, grains, label)
+    return r, grains, mat_ids, label
+
+
+def _time_rules(t):
+    """dt_min below dt_max."""
+    if t["dt_min"] >= t["dt_max"]:
+        raise SceneError("time.dt_min", f"must be < time.dt_max = {show(t['dt_max'])} "
+                         f"(got {show(t['dt_min'])})")
+
+
+def _domain_rules(d):
+    """rebalance: 0 or a ratio >= 1."""
+    if 0.0 < d["rebalance"] < 1.0:
+        raise SceneError("domain.rebalance", f"must be 0 (never) or >= 1 (max/mean load) "
+                         f"(got {show(d['rebalance'])})")
+
+
+def _materials(value):
+    """[materials.NAME] tables, each checked against its model's keys."""
+    mats = table(value, "materials")
+    if not mats:
+        raise SceneError("materials", "at least one [materials.NAME] table is required")
+    out = {}
+    for name, tbl in mats.items():
+        path = join("materials", name)
+        if not _NAME.fullmatch(name):
+            raise SceneError(path, f"bad material name (must match {S.NAME_PATTERN})")
+        model = table(tbl, path).get("model", "elastic")
+        keys = dict(S.MATERIAL_COMMON)
+        if model in S.MATERIAL_MODELS:
+            keys.update(S.MATERIAL_MODELS[model])
+        hint = f' for model "{model}"' if model in S.MATERIAL_MODELS else ""
+        m = check_table(tbl, keys, path, hint)
+        MODEL_RULES.get(m["model"], lambda m, p: None)(m, path)
+        out[name] = m
+    return out
+
+
+def _cap_rules(m, path):
+    """C < A; tension cut-off defaults to the envelope apex ln(A/C)/B."""
+    if not m["C"] < m["A"]:
+        raise SceneError(f"{path}.C", f"must be < A = {show(m['A'])} (got {show(m['C'])})")
+    if "tension_cutoff" not in m:
+        apex = math.log(m["A"] / m["C"]) / m["B"] if m["B"] > 0 and m["C"] > 0 else 0.0
+        m["tension_cutoff"] = apex
+    # Keep the schema's key order in the resolved table
+    order = list(S.MATERIAL_COMMON) + list(S.CAP)
+    items = sorted(m.items(), key=lambda kv: order.index(kv[0]))
+    m.clear()
+    m.update(items)
+
+
+# Model name -> rules tying its keys together (models without rules need no entry)
+MODEL_RULES = {"cap": _cap_rules}
+
+
+def _named_material(tbl, mat_ids, path):
+    """Check that ``tbl["material"]`` names a [materials.NAME] table; returns ``tbl``."""
+    if tbl["material"] not in mat_ids:
+        raise SceneError(f"{path}.material", f"unknown material {show(tbl['material'])} "
+                         f"(known: {', '.join(mat_ids)})")
+    return tbl
+
+
+def _blocks(value, mat_ids):
+    """[[blocks]]: names valid and unique, materials known."""
+    out = []
+    for i, b in enumerate(array_of_tables(value, "blocks")):
+        path = f"blocks[{i}]"
+        blk = _named_material(check_table(b, S.BLOCK, path), mat_ids, path)
+        if not _NAME.fullmatch(blk["name"]):
+            raise SceneError(f"{path}.name", f"bad block name {show(blk['name'])} (must "
+                             f"match {S.NAME_PATTERN})")
+        for k, other in enumerate(out):
+            if other["name"] == blk["name"]:
+                raise SceneError(f"{path}.name", f"duplicate block name {show(blk['name'])} "
+                                 f"(also blocks[{k}])")
+        out.append(blk)
+    return out
+
+
+def _bcs(value, block_names):
+    """[[bc]]: a body xor a wall; dof and velocity as the type requires."""
+    out = []
+    for i, b in enumerate(array_of_tables(value, "bc")):
+        p = f"bc[{i}]"
+        bc = check_table(b, S.BC, p)
+        # Where: a block's nodes or a domain wall
+        if ("body" in bc) == ("wall" in bc):
+            raise SceneError(p, "give exactly one of body (a block name) or wall (a side)")
+        if "body" in bc:
+            if bc["body"] not in block_names:
+                raise SceneError(f"{p}.body", f"unknown block {show(bc['body'])} (known: "
+                                 f"{', '.join(block_names) or 'no blocks'})")
+            bc.setdefault("nodes", "all")
+            side = bc["nodes"]
+        elif "nodes" in bc:
+            raise SceneError(f"{p}.nodes", "only with body (a wall condition takes every "
+                             "node on the wall)")
+        else:
+            side = bc["wall"]
+        # What: the constrained components and the prescribed velocity
+        kind = bc["type"]
+        if kind == "fixed":
+            if bc.get("dof", "xy") != "xy":
+                raise SceneError(f"{p}.dof", f'a fixed condition constrains "xy" (got '
+                                 f"{show(bc['dof'])}); use type roller for one component")
+            bc["dof"] = "xy"
+        elif kind == "roller" and "dof" not in bc:
+            if side == "all":
+                raise SceneError(f"{p}.dof", 'required for a roller on nodes = "all"')
+            bc["dof"] = "x" if side in ("left", "right") else "y"
+        bc.setdefault("dof", "xy")
+        if kind == "velocity" and "velocity" not in bc:
+            raise SceneError(f"{p}.velocity", "required for type velocity")
+        if kind != "velocity" and "velocity" in bc:
+            raise SceneError(f"{p}.velocity", f"only for type velocity (this is {kind})")
+        out.append({k: bc[k] for k in S.BC if k in bc})
+    return out
+
+
+def _contact(value, mat_ids):
+    """[contact] and its [contact.pairs."m1:m2"] overrides, fully filled in."""
+    keys = dict(S.CONTACT, pairs=None)
+    tbl = table(value, "contact")
+    pairs_in = table(tbl.get("pairs", {}), "contact.pairs")
+    c = check_table({k: v for k, v in tbl.items() if k != "pairs"},
+                    {k: v for k, v in keys.items() if k != "pairs"}, "contact")
+    ks_given = "ks" in c
+    c.setdefault("ks", 0.5 * c["kn0"])
+    c = {k: c[k] for k in S.CONTACT}
+    pairs, seen = {}, {}
+    for name, ptbl in pairs_in.items():
+        path = join("contact.pairs", name)
+        mats = name.split(":")
+        if len(mats) != 2 or any(m not in mat_ids for m in mats):
+            raise SceneError(path, f'expected "mat1:mat2" with known materials (known: '
+                             f"{', '.join(mat_ids)})")
+        key = tuple(sorted(mats))
+        if key in seen:
+            raise SceneError(path, f"same pair as contact.pairs.{seen[key]}")
+        seen[key] = f'"{name}"'
+        p = check_table(ptbl, S.CONTACT_PAIR, path)
+        p.setdefault("kn0", c["kn0"])
+        p.setdefault("delta_max", c["delta_max"])
+        p.setdefault("ks", c["ks"] if ks_given else 0.5 * p["kn0"])
+        p.setdefault("friction", c["friction"])
+        pairs[name] = {k: p[k] for k in S.CONTACT_PAIR}
+    c["pairs"] = pairs
+    return c
+
+
+def _output(value, t_end):
+    """[output]: derived intervals; the output directory must exist and be writable."""
+    o = check_table(value, S.OUTPUT, "output")
+    o.setdefault("interval", t_end / 20.0)
+    o.setdefault("energy_interval", o["interval"] / 10.0)
+    parent = Path(o["path"]).parent
+    if o["path"] == "" or Path(o["path"]).is_dir():
+        raise SceneError("output.path", f"must name a file (got {show(o['path'])})")
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise SceneError("output.path", f"directory {show(str(parent))} does not exist or "
+                         "is not writable")
+    return {k: o[k] for k in S.OUTPUT}
+
+
+def _grain_arrays(inline, rows, mat_ids):
+    """All grains as arrays (inline first, then the file) and a grain-label function."""
+    n0 = len(inline)
+    arrays = {
+        "center": np.array([g["center"] for g in inline], float).reshape(n0, 2),
+        "axes": np.array([g["axes"] for g in inline], float).reshape(n0, 2),
+        "angle": np.array([g["angle"] for g in inline], float).reshape(n0),
+        "velocity": np.array([g["velocity"] for g in inline], float).reshape(n0, 2),
+        "material": np.array([mat_ids[g["material"]] for g in inline], np.int64).reshape(n0),
+    }
+    if rows is not None:
+        arrays = {k: np.concatenate([v, rows.arrays[k]]) for k, v in arrays.items()}
+
+    def label(i):
+        """``grains[i]`` or ``grains_file: f.csv line 12 (grain i)``."""
+        if i < n0:
+            return f"grains[{i}]"
+        return f"grains_file: {rows.label(i - n0)} (grain {i})"
+
+    return arrays, label
+
+
+def _geometry(r, g, label):
+    """Cell size and skin; everything inside the box; no overlaps at t=0."""
+    dom = r["domain"]
+    box = dom["box"]
+    n = g["center"].shape[0]
+    blocks = [b["box"] for b in r["blocks"]]
+    if n == 0 and not blocks:
+        raise SceneError("grains", "the scene has no grains and no blocks")
+    # Skin and cell size (0 = auto)
+    diam = 2.0 * float(g["axes"].max()) if n else 0.0
+    if dom["skin"] == 0.0 and n:
+        dom["skin"] = 0.1 * 2.0 * float(g["axes"].min())
+    least = diam + dom["skin"]
+    if dom["cell_size"] == 0.0:
+        dom["cell_size"] = least if n else max(box[2] - box[0], box[3] - box[1])
+    elif dom["cell_size"] < least:
+        shown = f"{least:.6g}" if float(f"{least:.6g}") >= least else f"{least * 1.000001:.6g}"
+        raise SceneError("domain.cell_size", f"must be >= {shown} (largest grain diameter "
+                         f"{diam:.6g} + skin {dom['skin']:.6g}) (got {dom['cell_size']!r})")
+    # Inside the domain box
+    for i, bb in enumerate(blocks):
+        if bb[0] < box[0] or bb[1] < box[1] or bb[2] > box[2] or bb[3] > box[3]:
+            raise SceneError(f"blocks[{i}].box", "outside the domain box")
+    lo, hi = geo.ellipse_aabb(g["center"], g["axes"], g["angle"])
+    i = geo.first_outside(lo, hi, box)
+    if i >= 0:
+        raise SceneError(label(i), "outside the domain box")
+    # Overlaps
+    pair = geo.first_block_overlap(blocks)
+    if pair:
+        raise SceneError(f"blocks[{pair[0]}]", f"overlaps blocks[{pair[1]}]")
+    hit = geo.first_grain_block_overlap(g["center"], g["axes"], g["angle"], blocks)
+    if hit:
+        raise SceneError(label(hit[0]), f"overlaps blocks[{hit[1]}] "
+                         f"({r['blocks'][hit[1]]['name']}) at t=0")
+    pair = geo.first_grain_overlap(g["center"], g["axes"], g["angle"])
+    if pair:
+        j = label(pair[1])
+        raise SceneError(label(pair[0]), f"overlaps {j.replace('grains_file: ', '')} at t=0")

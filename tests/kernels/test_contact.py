@@ -1,0 +1,532 @@
+"""Contact kernels: overlap geometry, contact law, pair/wall forces, candidate finders."""
+
+import numpy as np
+import pytest
+
+from pdfem.kernels import contact as C
+from pdfem.kernels import contact_law as L
+from pdfem.kernels import overlap as O
+
+SQ = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+
+
+# ---- helpers ----
+
+
+def rot(a):
+    return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+
+def random_quad(rng, scale=1.0, spread=1.0):
+    """A random convex CCW quad: a perturbed square, rotated and shifted."""
+    while True:
+        s = scale * rng.uniform(0.5, 1.5)
+        q = (SQ - 0.5) * s + rng.uniform(-0.2, 0.2, (4, 2)) * s
+        q = q @ rot(rng.uniform(0, 2 * np.pi)).T + rng.uniform(-spread, spread, 2)
+        e = np.roll(q, -1, 0) - q
+        if np.all(e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1) > 1e-3):
+            return q
+
+
+def inside(p, q):
+    e = np.roll(q, -1, 0) - q
+    return np.all(e[:, 0] * (p[1] - q[:, 1]) - e[:, 1] * (p[0] - q[:, 0]) >= 0)
+
+
+def ref_overlap(p, q):
+    """Brute overlap: inner vertices + edge crossings, sorted by angle, shoelace."""
+    pts = [v for v in p if inside(v, q)] + [v for v in q if inside(v, p)]
+    for i in range(4):
+        a, b = p[i], p[(i + 1) % 4]
+        for j in range(4):
+            c, d = q[j], q[(j + 1) % 4]
+            den = (b[0] - a[0]) * (d[1] - c[1]) - (b[1] - a[1]) * (d[0] - c[0])
+            if den == 0:
+                continue
+            t = ((c[0] - a[0]) * (d[1] - c[1]) - (c[1] - a[1]) * (d[0] - c[0])) / den
+            u = ((c[0] - a[0]) * (b[1] - a[1]) - (c[1] - a[1]) * (b[0] - a[0])) / den
+            if 0 <= t <= 1 and 0 <= u <= 1:
+                pts.append(a + t * (b - a))
+    if len(pts) < 3:
+        return 0.0, np.zeros(2)
+    pts = np.array(pts)
+    m = pts.mean(0)
+    pts = pts[np.argsort(np.arctan2(pts[:, 1] - m[1], pts[:, 0] - m[0]))]
+    x, y = pts[:, 0], pts[:, 1]
+    cr = x * np.roll(y, -1) - np.roll(x, -1) * y
+    area = 0.5 * cr.sum()
+    if area <= 0:
+        return 0.0, np.zeros(2)
+    cx = ((x + np.roll(x, -1)) * cr).sum() / (6 * area)
+    cy = ((y + np.roll(y, -1)) * cr).sum() / (6 * area)
+    return area, np.array([cx, cy])
+
+
+def law_params(n, kn0=1e9, dmax=0.2, ks=5e8, mu=0.3, rcap=0.95):
+    p = np.empty((n, L.NPAR))
+    p[:, L.P_KN0], p[:, L.P_DMAX], p[:, L.P_KS] = kn0, dmax, ks
+    p[:, L.P_MU], p[:, L.P_RCAP] = mu, rcap
+    return p
+
+
+def two_elements(xa, xb, ebnd_a=(1, 1, 1, 1), ebnd_b=(1, 1, 1, 1)):
+    """Mesh data of two single-element bodies (gid 0 and 1)."""
+    x = np.vstack([xa, xb]).astype(float)
+    conn = np.array([[0, 1, 2, 3], [4, 5, 6, 7]], dtype=np.int64)
+    ebnd = np.array([ebnd_a, ebnd_b], dtype=np.int8)
+    return x, conn, ebnd, np.array([0, 1], dtype=np.int64), np.zeros(2, dtype=np.int64)
+
+
+def outputs(n):
+    return (
+        np.zeros(n, np.int8),
+        np.zeros((n, 4), np.int64),
+        np.zeros((n, 4)),
+        np.zeros((n, 2)),
+        np.zeros(n),
+        np.zeros((n, C.NRES)),
+    )
+
+
+def run_pairs(x, du, conn, ebnd, egid, eloc, pairs, params, us):
+    out = outputs(len(pairs))
+    nbad = C.element_pair_forces(x, du, conn, ebnd, egid, eloc, pairs, params, us, *out)
+    return nbad, out
+
+
+def nodal_forces(out, nn):
+    act, nodes, w, fa = out[:4]
+    f = np.zeros((nn, 2))
+    C.accumulate_sorted(np.arange(len(act), dtype=np.int64), act, nodes, w, fa, nn, f)
+    return f
+
+
+def grid_body(nx, ny, size, angle, shift, gid, node0):
+    """A body meshed by nx x ny quads; returns x, conn (offset by node0), ebnd, egid, eloc."""
+    gx, gy = np.meshgrid(np.linspace(0, nx * size, nx + 1), np.linspace(0, ny * size, ny + 1))
+    x = np.c_[gx.ravel(), gy.ravel()] @ rot(angle).T + shift
+    conn, ebnd = [], []
+    for j in range(ny):
+        for i in range(nx):
+            n = j * (nx + 1) + i
+            conn.append([n, n + 1, n + nx + 2, n + nx + 1])
+            ebnd.append([j == 0, i == nx - 1, j == ny - 1, i == 0])
+    ne = nx * ny
+    return (
+        x,
+        np.array(conn, np.int64) + node0,
+        np.array(ebnd, np.int8),
+        np.full(ne, gid, np.int64),
+        np.arange(ne, dtype=np.int64),
+    )
+
+
+# ---- overlap geometry ----
+
+
+@pytest.mark.parametrize("d", [0.1, 0.25, 0.5, 0.7, 0.9])
+def test_offset_unit_squares(d):
+    buf = O.alloc_clip_buffers()
+    st, area, cx, cy, c1x, c1y, c2x, c2y, k = O.quad_overlap(SQ, SQ + [d, 0.3], *buf)
+    assert st == O.OV_OK and k == 4
+    assert area == pytest.approx((1 - d) * 0.7, rel=1e-15, abs=0)
+    assert (cx, cy) == pytest.approx(((1 + d) / 2, 0.65), rel=1e-15)
+    # Chord joins the two boundary crossings; its clockwise normal points from A into B
+    assert {(round(c1x, 12), c1y), (round(c2x, 12), c2y)} == {(1.0, 0.3), (round(d, 12), 1.0)}
+    assert (c2y - c1y) > 0 and (c1x - c2x) > 0
+
+
+def test_quad_overlap_matches_brute_force():
+    rng = np.random.default_rng(1)
+    buf = O.alloc_clip_buffers()
+    nhit = 0
+    for _ in range(2000):
+        p, q = random_quad(rng), random_quad(rng)
+        st, area, cx, cy, c1x, c1y, c2x, c2y, k = O.quad_overlap(p, q, *buf)
+        ra, rc = ref_overlap(p, q)
+        assert area == pytest.approx(ra, rel=1e-12, abs=1e-13)
+        if st == O.OV_OK:
+            nhit += 1
+            assert (cx, cy) == pytest.approx(tuple(rc), rel=1e-10, abs=1e-12)
+            # The chord normal agrees with the boundary-normal sum (A into B)
+            sx, sy = O.boundary_normal_sum(*buf[:3], k)
+            assert (c2y - c1y) * sx + (c1x - c2x) * sy > 0
+            # Clipping is symmetric up to rounding
+            assert O.quad_overlap(q, p, *buf)[1] == pytest.approx(area, rel=1e-12)
+    assert nhit > 500
+
+
+def test_quad_overlap_containment_and_disjoint():
+    buf = O.alloc_clip_buffers()
+    small = 0.25 + 0.5 * SQ
+    assert O.quad_overlap(SQ, small, *buf)[0] == O.OV_INSIDE
+    assert O.quad_overlap(small, SQ, *buf)[0] == O.OV_INSIDE
+    assert O.quad_overlap(SQ, SQ + [2.0, 0.0], *buf)[:2] == (O.OV_NONE, 0.0)
+    # Touching along an edge has zero area
+    assert O.quad_overlap(SQ, SQ + [1.0, 0.5], *buf)[0] == O.OV_NONE
+
+
+def test_star_overlap_has_eight_crossings():
+    buf = O.alloc_clip_buffers()
+    c = np.array([0.5, 0.5])
+    q = (SQ - c) @ rot(np.pi / 4).T + c
+    st, area, *_, k = O.quad_overlap(SQ, q, *buf)
+    assert st == O.OV_OK and k == 8
+    assert np.sum(buf[2][:k, O.T_KIND] == O.K_X) == 8
+    assert area == pytest.approx(2 * (np.sqrt(2) - 1), rel=1e-14)
+
+
+def test_halfplane_closed_form():
+    buf = O.alloc_clip_buffers()
+    # Diamond (square rotated 45 deg) with its lowest vertex h below the wall: area h^2
+    dia = (SQ - 0.5) @ rot(np.pi / 4).T + [0.0, np.sqrt(0.5)]
+    for h in [0.05, 0.2, 0.5]:
+        st, area, cx, cy, c1x, c1y, c2x, c2y, k = O.halfplane_overlap(
+            dia, np.array([0.0, h]), np.array([0.0, 1.0]), *buf
+        )
+        assert st == O.OV_OK
+        assert area == pytest.approx(h * h, rel=1e-14)
+        assert (cx, cy) == pytest.approx((0.0, 2 * h / 3), abs=1e-14)
+        assert (c1y, c2y) == pytest.approx((h, h), rel=1e-15)
+        # Chord normal (clockwise) is -n: from the element into the wall
+        assert c2x - c1x > 0
+    # Random quads against random walls: area of the part behind the wall
+    rng = np.random.default_rng(2)
+    for _ in range(300):
+        p = random_quad(rng)
+        a = rng.uniform(0, 2 * np.pi)
+        n = np.array([np.cos(a), np.sin(a)])
+        p0 = rng.uniform(-0.5, 0.5, 2)
+        area = O.halfplane_overlap(p, p0, n, *buf)[1]
+        big = np.array([[-1, -50], [1, -50], [1, 0], [-1, 0]]) * [50, 1]
+        wall = big @ np.array([[n[1], -n[0]], [n[0], n[1]]]) + p0
+        assert area == pytest.approx(ref_overlap(p, wall)[0], rel=1e-11, abs=1e-13)
+    # Entirely behind the wall: guard
+    st = O.halfplane_overlap(SQ, np.array([0.0, 2.0]), np.array([0.0, 1.0]), *buf)[0]
+    assert st == O.OV_INSIDE
+
+
+# ---- contact law ----
+
+
+def test_normal_law_force_stiffness_energy():
+    kn0, dmax, w, rcap = 2e9, 1e-3, 0.01, 1 - 1e-9
+    f, k, e = L.normal_force(1e-9, w, kn0, dmax, rcap)
+    assert f == pytest.approx(-w * kn0 * 1e-9, rel=1e-5) and e > 0
+    assert L.normal_force(0.0, w, kn0, dmax, rcap) == (0.0, w * kn0, 0.0)
+    assert L.normal_force(-1e-6, w, kn0, dmax, rcap) == (0.0, 0.0, 0.0)
+    # Stiffness diverges as delta -> delta_max
+    ks = [L.normal_force(dmax * (1 - g), w, kn0, dmax, rcap)[1] for g in (1e-1, 1e-3, 1e-6)]
+    assert ks == pytest.approx([w * kn0 / g**2 for g in (1e-1, 1e-3, 1e-6)], rel=1e-6)
+    # Stiffness is the derivative of the force
+    for r in [0.01, 0.5, 0.9]:
+        h = 1e-7 * dmax
+        fp = L.normal_force(r * dmax + h, w, kn0, dmax, rcap)[0]
+        fm = L.normal_force(r * dmax - h, w, kn0, dmax, rcap)[0]
+        assert -(fp - fm) / (2 * h) == pytest.approx(
+            L.normal_force(r * dmax, w, kn0, dmax, rcap)[1], rel=1e-6
+        )
+
+
+@pytest.mark.parametrize("rcap", [0.5, 0.95, 1 - 1e-9])
+def test_normal_energy_is_integral_of_force(rcap):
+    kn0, dmax, w = 2e9, 1e-3, 0.01
+    xg, wg = np.polynomial.legendre.leggauss(40)
+    for r in [1e-6, 0.03, 0.3, 0.7, 0.9, 1.2 * rcap]:
+        d = r * dmax
+        if rcap > 0.9 and r > 0.99:
+            continue
+        # Piecewise Gauss quadrature (split at the cap) of -F
+        edges = sorted({0.0, min(d, rcap * dmax), d})
+        q = 0.0
+        for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+            s = 0.5 * (hi - lo) * xg + 0.5 * (hi + lo)
+            q -= (
+                0.5
+                * (hi - lo)
+                * sum(
+                    wi * L.normal_force(si, w, kn0, dmax, rcap)[0]
+                    for si, wi in zip(s, wg, strict=True)
+                )
+            )
+        assert L.normal_force(d, w, kn0, dmax, rcap)[2] == pytest.approx(q, rel=1e-12)
+
+
+def test_normal_law_linear_beyond_cap():
+    kn0, dmax, w, rcap = 1e9, 1e-3, 1.0, 0.9
+    fc, kc, _ = L.normal_force(rcap * dmax, w, kn0, dmax, rcap)
+    f2, k2, _ = L.normal_force(2 * dmax, w, kn0, dmax, rcap)
+    assert kc == k2 == pytest.approx(kn0 / 0.01)
+    assert f2 == pytest.approx(fc - kc * (2 - rcap) * dmax, rel=1e-14)
+
+
+def test_shear_stick_and_slip():
+    w, ks, mu, fn = 0.02, 1e9, 0.4, -1e4
+    lim = mu * abs(fn)
+    # Stick: elastic, no dissipation
+    us, fs, dis = L.shear_update(0.0, 0.5 * lim / (ks * w), w, ks, mu, fn)
+    assert fs == pytest.approx(0.5 * lim) and dis == 0.0 and us == pytest.approx(fs / (ks * w))
+    # Slip: force at the limit, history on the limit, dissipation = mu |Fn| slip
+    slip = 3e-7
+    us2, fs2, dis2 = L.shear_update(us, 0.5 * lim / (ks * w) + slip, w, ks, mu, fn)
+    assert fs2 == lim and us2 == pytest.approx(lim / (ks * w), rel=1e-15)
+    assert dis2 == pytest.approx(mu * abs(fn) * slip, rel=1e-8)
+    # Reversal from the limit is elastic again; negative slip is symmetric
+    us3, fs3, dis3 = L.shear_update(us2, -1e-8, w, ks, mu, fn)
+    assert dis3 == 0.0 and fs3 == pytest.approx(lim - ks * w * 1e-8)
+    us4, fs4, dis4 = L.shear_update(0.0, -(lim / (ks * w) + slip), w, ks, mu, fn)
+    assert fs4 == -lim and us4 == -us2 and dis4 == pytest.approx(dis2, rel=1e-8)
+    # No normal force: no shear force at all
+    assert L.shear_update(1e-6, 1e-6, w, ks, mu, 0.0) == (0.0, 0.0, 0.0)
+
+
+def test_contact_dt():
+    assert L.contact_dt(2.0, 2.0, 4.0) == L.DT_FACTOR * 2 * np.sqrt(1.0 / 4.0)
+    assert L.contact_dt(2.0, np.inf, 8.0) == L.DT_FACTOR * 2 * np.sqrt(2.0 / 8.0)
+    assert L.contact_dt(1.0, 1.0, 0.0) == np.inf
+    # The step shrinks with the hardening stiffness
+    k1 = L.normal_force(0.1e-3, 0.01, 1e9, 1e-3, 0.99)[1]
+    k2 = L.normal_force(0.9e-3, 0.01, 1e9, 1e-3, 0.99)[1]
+    assert L.contact_dt(1.0, 1.0, k1) / L.contact_dt(1.0, 1.0, k2) == pytest.approx(9.0)
+
+
+# ---- pair and wall kernels ----
+
+
+def random_pairs(rng, n):
+    """n random overlapping element pairs of single-element bodies, stacked into one mesh."""
+    xs, conns, ebnds, gids = [], [], [], []
+    while len(xs) < 2 * n:
+        p, q = random_quad(rng, spread=0.3), random_quad(rng, spread=0.3)
+        if O.quad_overlap(p, q, *O.alloc_clip_buffers())[0] != O.OV_OK:
+            continue
+        for e in (p, q):
+            conns.append(np.arange(4) + 4 * len(xs))
+            xs.append(e)
+            ebnds.append(rng.integers(0, 2, 4) | np.array([1, 0, 0, 0]))
+            gids.append(len(gids))
+    x = np.vstack(xs)
+    pairs = np.arange(2 * n, dtype=np.int64).reshape(n, 2)
+    return (
+        x,
+        np.array(conns, np.int64),
+        np.array(ebnds, np.int8),
+        np.array(gids, np.int64),
+        np.zeros(2 * n, np.int64),
+        pairs,
+    )
+
+
+def test_action_reaction_and_swap_symmetry():
+    rng = np.random.default_rng(3)
+    n = 300
+    x, conn, ebnd, egid, eloc, pairs = random_pairs(rng, n)
+    du = rng.normal(0, 1e-4, x.shape)
+    us = rng.normal(0, 1e-5, n)
+    par = law_params(n, kn0=1e9, dmax=2.0, ks=1e9, mu=0.3)
+    nbad, out = run_pairs(x, du, conn, ebnd, egid, eloc, pairs, par, us)
+    act, nodes, w, fa, uso, res = out
+    assert nbad == np.sum(act < 0)
+    assert np.sum(act == C.C_ACTIVE) > 0.9 * n
+    for p in np.flatnonzero(act == C.C_ACTIVE):
+        # The four nodal forces of a pair sum to zero
+        fnod = np.r_[w[p, :2], -w[p, 2:]][:, None] * fa[p]
+        assert np.abs(fnod.sum(0)).max() <= 1e-15 * np.abs(fa[p]).max() * 4
+        # Normal from A into B, force on A pushes it back, |Fs| <= mu |Fn|
+        nv = res[p, [C.R_NX, C.R_NY]]
+        assert fa[p] @ nv == pytest.approx(res[p, C.R_FN], rel=1e-12)
+        assert abs(res[p, C.R_FS]) <= 0.3 * abs(res[p, C.R_FN]) * (1 + 1e-15)
+        assert res[p, C.R_DELTA] == pytest.approx(
+            ref_overlap(x[conn[pairs[p, 0]]], x[conn[pairs[p, 1]]])[0] / res[p, C.R_WIDTH]
+        )
+    # Swapping A and B mirrors every output bit for bit
+    nbad2, out2 = run_pairs(x, du, conn, ebnd, egid, eloc, pairs[:, ::-1].copy(), par, us)
+    act2, nodes2, w2, fa2, uso2, res2 = out2
+    assert nbad2 == nbad
+    assert np.array_equal(act2, act) and np.array_equal(uso2, uso)
+    assert np.array_equal(nodes2, nodes[:, [2, 3, 0, 1]])
+    assert np.array_equal(w2, w[:, [2, 3, 0, 1]])
+    assert np.array_equal(fa2, -fa)
+    flipn = np.ones(C.NRES)
+    flipn[[C.R_NX, C.R_NY]] = -1
+    assert np.array_equal(res2, res * flipn)
+    # Nodal forces of the whole set sum to zero; swapped order gives the same node forces
+    f1, f2 = nodal_forces(out, len(x)), nodal_forces(out2, len(x))
+    assert np.array_equal(f1, f2)
+    assert np.abs(f1.sum(0)).max() <= 1e-14 * np.abs(f1).max()
+
+
+def test_flat_contact_normal_and_moment_balance():
+    # A below, B above, overlapping by 0.1 with a lateral offset: only A's top edge and B's
+    # bottom edge are grain boundary (the overlap is cut by A's interior right edge)
+    x, conn, ebnd, egid, eloc = two_elements(SQ, SQ + [0.3, 0.9], (0, 0, 1, 0), (1, 0, 0, 0))
+    par = law_params(1, kn0=1e9, dmax=0.5, ks=1e9, mu=0.5)
+    du = np.zeros_like(x)
+    pairs = np.array([[0, 1]], np.int64)
+    nbad, out = run_pairs(x, du, conn, ebnd, egid, eloc, pairs, par, np.zeros(1))
+    act, nodes, w, fa, uso, res = out
+    assert nbad == 0 and act[0] == C.C_ACTIVE
+    # Exact normal (the chord between the crossings is a diagonal, tilted by atan(0.1/0.7))
+    assert (res[0, C.R_NX], res[0, C.R_NY]) == (0.0, 1.0)
+    assert res[0, C.R_WIDTH] == pytest.approx(0.7) and res[0, C.R_DELTA] == pytest.approx(0.1)
+    fn = L.normal_force(0.1, 0.7, 1e9, 0.5, 0.95)[0]
+    assert fa[0] == pytest.approx([0.0, fn], rel=1e-13)
+    assert list(nodes[0]) == [2, 3, 4, 5]
+    # Moment about any point vanishes (normal forces collinear)
+    f = nodal_forces(out, len(x))
+    for pt in ([0.0, 0.0], [3.0, -7.0]):
+        r = x - pt
+        mom = np.sum(r[:, 0] * f[:, 1] - r[:, 1] * f[:, 0])
+        assert abs(mom) <= 1e-15 * np.abs(f).max() * 10
+    # Shear: B displaced by +t relative to A drags A along +t
+    du[4:] = [1e-6, 0.0]
+    t = np.array([-res[0, C.R_NY], res[0, C.R_NX]])
+    _, out = run_pairs(x, du, conn, ebnd, egid, eloc, pairs, par, np.zeros(1))
+    assert out[4][0] == pytest.approx(1e-6 * (np.array([1.0, 0.0]) @ t))
+    assert out[3][0] @ t == pytest.approx(1e9 * 0.7 * out[4][0], rel=1e-12)
+
+
+def test_lens_normal_equals_chord_normal():
+    # Corner of a diamond B poking into the boundary face of A: the report's chord rule
+    dia = (SQ - 0.5) @ rot(np.pi / 4).T + [0.4, 1.0 + np.sqrt(0.5) - 0.1]
+    x, conn, ebnd, egid, eloc = two_elements(SQ, dia, (0, 0, 1, 0), (1, 1, 1, 1))
+    buf = O.alloc_clip_buffers()
+    _, _, _, _, c1x, c1y, c2x, c2y, _ = O.quad_overlap(SQ, dia, *buf)
+    chord = np.array([c2y - c1y, c1x - c2x]) / np.hypot(c2x - c1x, c2y - c1y)
+    _, out = run_pairs(
+        x,
+        np.zeros_like(x),
+        conn,
+        ebnd,
+        egid,
+        eloc,
+        np.array([[0, 1]], np.int64),
+        law_params(1),
+        np.zeros(1),
+    )
+    res = out[5][0]
+    assert (res[C.R_NX], res[C.R_NY]) == pytest.approx(tuple(chord), abs=1e-15)
+    assert res[C.R_DELTA] == pytest.approx(0.1 / 2, rel=1e-12)
+
+
+def test_guards_and_history_reset():
+    par = law_params(3)
+    small = 0.25 + 0.5 * SQ
+    x, conn, ebnd, egid, eloc = two_elements(SQ, small)
+    x = np.vstack([x, SQ + [5.0, 0.0], SQ + [5.5, 0.5]])
+    conn = np.vstack([conn, [[8, 9, 10, 11], [12, 13, 14, 15]]]).astype(np.int64)
+    ebnd = np.vstack([ebnd, [[1, 1, 1, 1], [0, 0, 0, 0]]]).astype(np.int8)
+    egid = np.arange(4, dtype=np.int64)
+    eloc = np.zeros(4, np.int64)
+    pairs = np.array([[0, 1], [0, 2], [2, 3]], np.int64)
+    us = np.array([1e-6, 2e-6, 3e-6])
+    nbad, out = run_pairs(x, np.zeros_like(x), conn, ebnd, egid, eloc, pairs, par, us)
+    act, nodes, w, fa, uso, res = out
+    assert nbad == 2
+    assert list(act) == [C.C_INSIDE, C.C_NONE, C.C_NOEDGE]
+    assert list(uso) == [1e-6, 0.0, 3e-6]
+    assert not fa.any() and (nodes == -1).all()
+
+
+def test_wall_contact():
+    # Unit square pressed 0.05 into a floor at y = 0, sliding along +x
+    x, conn, ebnd, egid, eloc = two_elements(SQ + [2.0, -0.05], SQ + [5.0, 5.0])
+    du = np.zeros_like(x)
+    du[:4] = [2e-7, 0.0]
+    elems = np.array([0, 1, 0], np.int64)
+    p0 = np.array([[0.0, 0.0], [0.0, 0.0], [0.0, 2.0]])
+    wn = np.array([[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]])
+    par = law_params(3, kn0=1e9, dmax=0.2, ks=1e9, mu=0.5)
+    out = outputs(3)
+    nbad = C.element_wall_forces(x, du, conn, ebnd, elems, p0, wn, par, np.zeros(3), *out)
+    act, nodes, w, fa, uso, res = out
+    assert nbad == 1 and list(act) == [C.C_ACTIVE, C.C_NONE, C.C_INSIDE]
+    fn = L.normal_force(0.05, 1.0, 1e9, 0.2, 0.95)[0]
+    assert res[0, C.R_DELTA] == pytest.approx(0.05, rel=1e-13)
+    assert (res[0, C.R_NX], res[0, C.R_NY]) == (-0.0, -1.0)
+    assert fa[0, 1] == pytest.approx(-fn, rel=1e-13)
+    # Friction opposes the sliding: history -2e-7 along t = (1, 0)
+    assert uso[0] == pytest.approx(-2e-7) and fa[0, 0] == pytest.approx(-1e9 * 2e-7)
+    assert list(nodes[0]) == [0, 1, -1, -1] and w[0].sum() == pytest.approx(1.0)
+
+
+def test_accumulate_order_and_ghosts():
+    rng = np.random.default_rng(4)
+    x, conn, ebnd, egid, eloc, pairs = random_pairs(rng, 50)
+    par = law_params(50, dmax=2.0)
+    _, out = run_pairs(x, np.zeros_like(x), conn, ebnd, egid, eloc, pairs, par, np.zeros(50))
+    act, nodes, w, fa = out[:4]
+    order = rng.permutation(50).astype(np.int64)
+    n_owned = len(x) // 2
+    f = np.zeros_like(x)
+    C.accumulate_sorted(order, act, nodes, w, fa, n_owned, f)
+    ref = np.zeros_like(x)
+    for p in order:
+        if act[p] == C.C_ACTIVE:
+            for k in range(4):
+                if nodes[p, k] < n_owned:
+                    ref[nodes[p, k]] += (w[p, k] if k < 2 else -w[p, k]) * fa[p]
+    assert np.array_equal(f, ref) and not f[n_owned:].any()
+    # Stable step over the contacts
+    m = rng.uniform(1.0, 2.0, len(x))
+    dt = C.contact_dt_min(act, nodes, out[5], m)
+    assert 0 < dt < np.inf
+
+
+# ---- candidate finders ----
+
+
+def test_candidate_pairs_equal_brute_force():
+    rng = np.random.default_rng(5)
+    xs, conns, ebnds, gids, elocs, e0, e1 = [], [], [], [], [], [], []
+    nn = ne = 0
+    gperm = rng.permutation(40)
+    for b in range(40):
+        nx, ny = rng.integers(1, 4, 2)
+        x, conn, eb, eg, el = grid_body(
+            nx, ny, rng.uniform(0.2, 0.5), rng.uniform(0, 6.3), rng.uniform(0, 6, 2), gperm[b], nn
+        )
+        xs.append(x)
+        conns.append(conn)
+        ebnds.append(eb)
+        gids.append(eg)
+        elocs.append(el)
+        e0.append(ne)
+        ne += len(conn)
+        nn += len(x)
+        e1.append(ne)
+    x, conn = np.vstack(xs), np.vstack(conns)
+    ebnd, egid, eloc = np.vstack(ebnds), np.concatenate(gids), np.concatenate(elocs)
+    ebnd[rng.random(ebnd.shape) < 0.1] = 0
+    bbox = np.zeros((ne, 4))
+    O.element_bboxes(x, conn, 0, ne, bbox)
+    assert np.array_equal(bbox[:, :2], np.stack([x[conn].min(1)[:, i] for i in (0, 1)], 1))
+    skin = 0.1
+    out = np.zeros((10, 2), np.int64)
+    n = O.pairs_from_bboxes(bbox, ebnd, egid, eloc, 0, ne, skin, out)
+    assert n > 10
+    brute = np.zeros((n, 2), np.int64)
+    assert O.pairs_from_bboxes(bbox, ebnd, egid, eloc, 0, ne, skin, brute) == n
+    bp = np.array([(i, j) for i in range(40) for j in range(i + 1, 40)], np.int64)
+    bp[::2] = bp[::2, ::-1]
+    cand = np.zeros((n + 5, 2), np.int64)
+    assert (
+        O.candidate_pairs(bbox, ebnd, egid, eloc, np.array(e0), np.array(e1), bp, skin, cand) == n
+    )
+    cand = cand[:n]
+    assert {tuple(p) for p in brute} == {tuple(p) for p in cand}
+    # Oriented lower body gid first, boundary elements only, near within skin
+    assert np.all(egid[cand[:, 0]] < egid[cand[:, 1]])
+    assert np.all(ebnd[cand].reshape(n, -1).any(1))
+    gap = np.maximum(
+        bbox[cand[:, 0], :2] - bbox[cand[:, 1], 2:], bbox[cand[:, 1], :2] - bbox[cand[:, 0], 2:]
+    )
+    assert np.all(gap <= skin)
+    # Every element pair that overlaps (no skin) is a candidate
+    buf = O.alloc_clip_buffers()
+    cset = {tuple(p) for p in cand}
+    for i in range(ne):
+        for j in range(ne):
+            if egid[i] < egid[j] and ebnd[i].any() and ebnd[j].any():
+                if O.quad_overlap(x[conn[i]], x[conn[j]], *buf)[0] != O.OV_NONE:
+                    assert (i, j) in cset

@@ -1,0 +1,286 @@
+"""Element kernels: patch test, rigid spin objectivity, mass, energy, numpy twin, dt, quality."""
+
+import numpy as np
+import pytest
+
+from pdfem.bench.numpy_element import numpy_forces_1pt, numpy_forces_2x2
+from pdfem.kernels.elastic import elastic_energy_density, elastic_update
+from pdfem.kernels.element import (
+    q4_forces_1pt,
+    q4_forces_2x2,
+    q4_jacobian_ratio,
+    q4_lumped_mass,
+    q4_strain_energy,
+)
+from pdfem.kernels.params import BULK, CAP, ELASTIC, MODEL, NPAR, RHO, SHEAR
+from pdfem.kernels.stable import q4_stable_dt
+
+K = 1.0e10
+G = 6.0e9
+RHO0 = 2500.0
+E = 9.0 * K * G / (3.0 * K + G)
+HGC = 0.1
+RULES = {"1pt": (q4_forces_1pt, numpy_forces_1pt, 1), "2x2": (q4_forces_2x2, numpy_forces_2x2, 4)}
+
+
+def material(model=ELASTIC):
+    """One-row material table."""
+    mat = np.zeros((1, NPAR))
+    mat[0, [MODEL, RHO, BULK, SHEAR]] = [model, RHO0, K, G]
+    return mat
+
+
+def grid(nx, ny, jitter, seed, offset=(0.0, 0.0)):
+    """Jittered nx x ny grid of unit quads (all nodes moved), counter-clockwise connectivity."""
+    rng = np.random.default_rng(seed)
+    gx, gy = np.meshgrid(np.arange(nx + 1.0), np.arange(ny + 1.0), indexing="xy")
+    x = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    x += rng.uniform(-jitter, jitter, size=x.shape) + np.asarray(offset)
+    i, j = np.meshgrid(np.arange(nx), np.arange(ny), indexing="xy")
+    n0 = (j * (nx + 1) + i).ravel()
+    conn = np.stack([n0, n0 + 1, n0 + nx + 2, n0 + nx + 1], axis=1).astype(np.int64)
+    return x, conn
+
+
+class State:
+    """Per-element arrays of one run."""
+
+    def __init__(self, nn, ne, nip):
+        self.sig = np.zeros((ne, nip, 4))
+        self.mstate = np.zeros((ne, nip, 0))
+        self.hgq = np.zeros((ne, 2))
+        self.f = np.zeros((nn, 2))
+        self.ewint = np.zeros(ne)
+        self.ewp = np.zeros(ne)
+
+    def step(self, fn, x, du, conn, mat, e0=0, e1=None):
+        """One force evaluation; f is cleared first."""
+        e1 = conn.shape[0] if e1 is None else e1
+        self.f[:] = 0.0
+        emat = np.zeros(conn.shape[0], dtype=np.int32)
+        return fn(x, du, conn, emat, mat, self.sig, self.mstate, self.hgq, HGC, e0, e1,
+                  self.f, self.ewint, self.ewp)
+
+
+def c_apply(deps):
+    """C:deps for (xx, yy, xy, zz) tensor components."""
+    lam = K - 2.0 * G / 3.0
+    tr = deps[0] + deps[1] + deps[3]
+    return np.array([lam * tr + 2 * G * deps[0], lam * tr + 2 * G * deps[1], 2 * G * deps[2],
+                     lam * tr + 2 * G * deps[3]])
+
+
+@pytest.mark.parametrize("rule", ["1pt", "2x2"])
+def test_patch_linear_increment(rule):
+    """du = H X (+ translation) from a uniform stress: uniform closed-form stress, no residual."""
+    fn, _, nip = RULES[rule]
+    xref, conn = grid(3, 3, 0.15, seed=1, offset=(10.0, -4.0))
+    h = np.array([[1.0e-3, 2.0e-3], [-1.5e-3, -0.5e-3]])
+    du = xref @ h.T + np.array([3e-4, -2e-4])
+    x = xref + du
+    st = State(x.shape[0], conn.shape[0], nip)
+    sig0 = np.array([1.0e6, -2.0e6, 5.0e5, 3.0e5])
+    st.sig[:] = sig0
+    assert st.step(fn, x, du, conn, material()) == -1
+    # Closed form: L = H (I + H/2)^-1 at x_mid = (I + H/2) X + t/2, Cayley rotation, then C:deps
+    lg = h @ np.linalg.inv(np.eye(2) + 0.5 * h)
+    w = 0.5 * (lg - lg.T)
+    q = np.linalg.solve(np.eye(2) - 0.5 * w, np.eye(2) + 0.5 * w)
+    s2 = q @ np.array([[sig0[0], sig0[2]], [sig0[2], sig0[1]]]) @ q.T
+    d = 0.5 * (lg + lg.T)
+    expect = np.array([s2[0, 0], s2[1, 1], s2[0, 1], sig0[3]]) + c_apply(
+        np.array([d[0, 0], d[1, 1], d[0, 1], 0.0]))
+    scale = np.max(np.abs(expect))
+    assert np.max(np.abs(st.sig - expect)) <= 1e-12 * scale
+    # Interior nodes (5, 6, 9, 10 of the 4 x 4 grid) carry no net force
+    interior = [5, 6, 9, 10]
+    fscale = np.max(np.abs(st.f))
+    assert np.max(np.abs(st.f[interior])) <= 1e-12 * fscale
+    assert np.max(np.abs(st.hgq)) <= 1e-12 * fscale
+
+
+def grain6():
+    """Six convex quads (3 x 2 jittered grid) centred near (5, 3)."""
+    x, conn = grid(3, 2, 0.2, seed=7, offset=(3.5, 2.0))
+    return x, conn
+
+
+def rotate(xref, centre, theta):
+    """Rigid rotation of points xref about centre by theta."""
+    c, s = np.cos(theta), np.sin(theta)
+    r = np.array([[c, -s], [s, c]])
+    return centre + (xref - centre) @ r.T
+
+
+@pytest.mark.parametrize("rule", ["1pt", "2x2"])
+def test_rigid_spin_stress_free(rule):
+    """360 degrees in 3600 prescribed steps: |stress| < 1e-9 * E * 1e-3 (strain scale 1e-3)."""
+    fn, _, nip = RULES[rule]
+    xref, conn = grain6()
+    centre = np.array([5.0, 3.0])
+    st = State(xref.shape[0], conn.shape[0], nip)
+    mat = material()
+    xold = xref.copy()
+    for k in range(1, 3601):
+        x = rotate(xref, centre, 2.0 * np.pi * k / 3600)
+        assert st.step(fn, x, x - xold, conn, mat) == -1
+        xold = x
+    tol = 1e-9 * E * 1e-3
+    assert np.max(np.abs(st.sig)) < tol
+    assert np.max(np.abs(st.hgq)) < tol * 1.0  # N/m over elements of size ~1 m
+    assert np.max(np.abs(st.f)) < tol
+
+
+@pytest.mark.parametrize("rule", ["1pt", "2x2"])
+def test_prestressed_rotation_90(rule):
+    """A uniform sigma_xx rotated rigidly by 90 degrees becomes sigma_yy; sigma_zz is kept."""
+    fn, _, nip = RULES[rule]
+    xref = np.array([[0.0, 0.0], [1.2, 0.1], [1.1, 0.9], [-0.1, 1.0]])
+    conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
+    st = State(4, 1, nip)
+    st.sig[:] = [2.0e6, 0.0, 0.0, 7.0e5]
+    xold = xref.copy()
+    for k in range(1, 91):
+        x = rotate(xref, np.array([0.5, 0.5]), 0.5 * np.pi * k / 90)
+        assert st.step(fn, x, x - xold, conn, material()) == -1
+        xold = x
+    np.testing.assert_allclose(st.sig[0], np.tile([0.0, 2.0e6, 0.0, 7.0e5], (nip, 1)),
+                               rtol=0, atol=1e-6 * 2.0e6)
+
+
+def test_hourglass_mode_resisted():
+    """Unit square, du = d h in x: no strain, hgq = hg_coef (K + 4G/3) (B.B)/A d, forces oppose."""
+    x0 = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
+    d = 1e-5
+    du = np.zeros((4, 2))
+    du[:, 0] = d * np.array([1.0, -1.0, 1.0, -1.0])
+    st = State(4, 1, 1)
+    assert st.step(q4_forces_1pt, x0 + du, du, conn, material()) == -1
+    # Centroid strain vanishes; B.B / A = A b.b = 2 for the unit square; dq = d (gamma.h = 1)
+    assert np.max(np.abs(st.sig)) == 0.0
+    kexp = HGC * (K + 4.0 * G / 3.0) * 2.0
+    # Current geometry of a hourglassed square differs at O(d^2) from the reference
+    np.testing.assert_allclose(st.hgq[0], [kexp * d, 0.0], rtol=1e-9, atol=1e-9 * kexp * d)
+    assert np.sum(st.f * du) < 0.0
+
+
+@pytest.mark.parametrize("rule", ["1pt", "2x2"])
+def test_first_step_work_equals_stored_energy(rule):
+    """From zero stress, one step: ewint = stored energy (elastic + hourglass) exactly."""
+    fn, _, nip = RULES[rule]
+    xref, conn = grid(2, 2, 0.2, seed=3)
+    du = np.random.default_rng(4).uniform(-1e-4, 1e-4, size=xref.shape)
+    x = xref + du
+    st = State(x.shape[0], conn.shape[0], nip)
+    assert st.step(fn, x, du, conn, material()) == -1
+    out = np.zeros(conn.shape[0])
+    q4_strain_energy(x, conn, np.zeros(conn.shape[0], np.int32), material(), st.sig, st.hgq,
+                     HGC, 0, conn.shape[0], out)
+    np.testing.assert_allclose(st.ewint, out, rtol=1e-12)
+    assert np.all(out > 0.0) and np.all(st.ewp == 0.0)
+
+
+def test_elastic_energy_density_closed_form():
+    """0.5 sig:C^-1:sig equals 0.5 sig:eps for sig = C:eps, zz and shear included."""
+    p = material()[0]
+    eps = np.array([1e-4, -3e-4, 2e-4, 5e-5])
+    sig = np.zeros(4)
+    assert elastic_update(p, sig, eps, np.zeros(0)) == 0.0
+    np.testing.assert_allclose(sig, c_apply(eps), rtol=1e-14)
+    work = 0.5 * (sig[0] * eps[0] + sig[1] * eps[1] + 2 * sig[2] * eps[2] + sig[3] * eps[3])
+    np.testing.assert_allclose(elastic_energy_density(p, sig), work, rtol=1e-12)
+
+
+def test_lumped_mass_sums_to_rho_area():
+    """Row-sum mass of a distorted patch sums to rho * area; a square gives rho A / 4 per node."""
+    x, conn = grid(3, 3, 0.2, seed=2)
+    ne = conn.shape[0]
+    m = np.zeros(x.shape[0])
+    q4_lumped_mass(x, conn, np.zeros(ne, np.int32), material(), 0, ne, m)
+    xe = x[conn]
+    area = 0.5 * np.sum(xe[:, :, 0] * np.roll(xe[:, :, 1], -1, axis=1)
+                        - np.roll(xe[:, :, 0], -1, axis=1) * xe[:, :, 1])
+    assert abs(m.sum() - RHO0 * area) <= 1e-14 * RHO0 * area
+    sq = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0], [0.0, 2.0]])
+    m = np.zeros(4)
+    q4_lumped_mass(sq, np.array([[0, 1, 2, 3]]), np.zeros(1, np.int32), material(), 0, 1, m)
+    np.testing.assert_allclose(m, RHO0, rtol=1e-15)
+
+
+@pytest.mark.parametrize("rule", ["1pt", "2x2"])
+def test_numba_matches_numpy(rule):
+    """Several random steps on a distorted mesh, subrange included: twins agree to 1e-12."""
+    fn, ref, nip = RULES[rule]
+    xref, conn = grid(4, 3, 0.2, seed=5)
+    runs = []
+    for kernel in (fn, ref):
+        rng = np.random.default_rng(6)
+        st = State(xref.shape[0], conn.shape[0], nip)
+        st.sig[:] = rng.normal(size=st.sig.shape) * 1e6
+        st.hgq[:] = rng.normal(size=st.hgq.shape) * 1e3
+        x = xref.copy()
+        for _ in range(4):
+            du = rng.uniform(-2e-3, 2e-3, size=x.shape)
+            x = x + du
+            assert st.step(kernel, x, du, conn, material(), 2, 10) == -1
+        runs.append(st)
+    a, b = runs
+    for u, v in [(a.sig, b.sig), (a.hgq, b.hgq), (a.f, b.f), (a.ewint, b.ewint)]:
+        assert np.max(np.abs(u - v)) <= 1e-12 * np.max(np.abs(u))
+    # Elements outside [2, 10) are untouched
+    assert np.all(a.ewint[:2] == 0.0) and np.all(a.ewint[10:] == 0.0)
+
+
+@pytest.mark.parametrize("rule", ["1pt", "2x2"])
+def test_failures_return_element_index(rule):
+    """An inverted element, or an unwired material model, is reported by its index."""
+    fn, ref, nip = RULES[rule]
+    x, conn = grid(3, 1, 0.0, seed=0)
+    bad = x.copy()
+    bad[7] = [1.5, -1.0]  # node 7 belongs to element 2 only: turns it inside out
+    du = np.zeros_like(x)
+    for kernel in (fn, ref):
+        assert State(8, 3, nip).step(kernel, bad, du, conn, material()) == 2
+        assert State(8, 3, nip).step(kernel, bad, du, conn, material(), 0, 2) == -1
+    st = State(8, 3, nip)
+    assert st.step(fn, x, du, conn, material(CAP)) == 0
+    with pytest.raises(ValueError):
+        State(8, 3, nip).step(ref, x, du, conn, material(CAP))
+
+
+@pytest.mark.parametrize("rule", ["1pt", "2x2"])
+def test_state_layouts_agree(rule):
+    """mstate of shape (ne, nip, 0) and (0, nip, 0) give identical results."""
+    fn, _, nip = RULES[rule]
+    x, conn = grid(2, 2, 0.2, seed=8)
+    du = np.random.default_rng(9).uniform(-1e-3, 1e-3, size=x.shape)
+    a = State(x.shape[0], 4, nip)
+    b = State(x.shape[0], 4, nip)
+    b.mstate = np.zeros((0, nip, 0))
+    a.step(fn, x + du, du, conn, material())
+    b.step(fn, x + du, du, conn, material())
+    assert np.array_equal(a.sig, b.sig) and np.array_equal(a.f, b.f)
+
+
+def test_stable_dt_unit_square():
+    """Unit square: L = area / longest diagonal = 1/sqrt(2); empty range gives +inf."""
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
+    emat = np.zeros(1, np.int32)
+    cp = np.sqrt((K + 4.0 * G / 3.0) / RHO0)
+    np.testing.assert_allclose(q4_stable_dt(x, conn, emat, material(), 0, 1),
+                               1.0 / np.sqrt(2.0) / cp, rtol=1e-15)
+    assert q4_stable_dt(x, conn, emat, material(), 0, 0) == np.inf
+
+
+def test_jacobian_ratio():
+    """Square and sheared parallelogram: 1; corner (1,1) moved to (1+s,1): 1/(1+s)."""
+    conn = np.array([[0, 1, 2, 3]] * 3, dtype=np.int64) + 4 * np.arange(3)[:, None]
+    s = 0.4
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0],
+                  [0.0, 0.0], [1.0, 0.0], [1.0 + s, 1.0], [s, 1.0],
+                  [0.0, 0.0], [1.0, 0.0], [1.0 + s, 1.0], [0.0, 1.0]])
+    out = np.zeros(3)
+    q4_jacobian_ratio(x, conn, 0, 3, out)
+    np.testing.assert_allclose(out, [1.0, 1.0, 1.0 / (1.0 + s)], rtol=1e-15)

@@ -1,0 +1,88 @@
+"""Small scenes built in code for the tests (TOML text, parsed by the real scene loader)."""
+
+import numpy as np
+
+ELASTIC = """
+[materials.grain]
+model = "elastic"
+density = 1900.0
+bulk = 12.7e9
+shear = 4.4e9
+"""
+
+
+def drifting_grains(n=12, box=(0.0, 0.0, 0.024, 0.006), speed=200.0, end=4e-6, seed=1,
+                    out="run.h5", level=1, rule="1pt", extra="", frac=1.0):
+    """Grains on a loose lattice drifting in random directions (no contact): migration."""
+    rng = np.random.default_rng(seed)
+    xmin, ymin, xmax, ymax = box
+    cols = int(np.ceil(n / 2))
+    lines = []
+    for i in range(n):
+        cx = xmin + (i % cols + 0.5) * frac * (xmax - xmin) / cols
+        cy = ymin + (i // cols + 0.5) * (ymax - ymin) / 2
+        ang = rng.uniform(0, np.pi)
+        v = rng.uniform(-1, 1, 2) * speed
+        v[0] = abs(v[0]) + speed
+        lines.append(f"[[grains]]\ncenter = [{cx!r}, {cy!r}]\naxes = [4.0e-4, 3.0e-4]\n"
+                     f"angle = {float(ang)!r}\nmaterial = \"grain\"\nvelocity = [{float(v[0])!r}, {float(v[1])!r}]\n")
+    return f"""
+[domain]
+box = [{xmin}, {ymin}, {xmax}, {ymax}]
+cell_size = 1.0e-3
+skin = 1.0e-4
+partition = "strips"
+
+[time]
+end = {end}
+safety = 0.5
+
+[element]
+rule = "{rule}"
+level = {level}
+
+[output]
+path = "{out}"
+interval = {end / 4}
+{ELASTIC}
+{extra}
+""" + "\n".join(lines)
+
+
+def stretched_block(end=2e-6, out="run.h5", rule="1pt", nx=40, ny=2, v=1.0, extra=""):
+    """A bar fixed on the left and pulled at velocity v on the right: a wave runs along."""
+    return f"""
+[domain]
+box = [0.0, 0.0, 0.02, 0.001]
+
+[time]
+end = {end}
+safety = 0.5
+
+[element]
+rule = "{rule}"
+
+[output]
+path = "{out}"
+interval = {end / 4}
+{ELASTIC}
+[[blocks]]
+name = "bar"
+box = [0.0, 0.0, 0.02, 0.001]
+nx = {nx}
+ny = {ny}
+material = "grain"
+
+[[bc]]
+body = "bar"
+nodes = "left"
+type = "fixed"
+
+[[bc]]
+body = "bar"
+nodes = "right"
+type = "velocity"
+dof = "x"
+velocity = [{v}, 0.0]
+{extra}
+"""

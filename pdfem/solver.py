@@ -125,7 +125,8 @@ class Simulation:
     def neighbourhood(self):
         """Rebuild ghosts and migrate when any node moved more than half the skin."""
         s = self.store
-        moved = max_displacement2(s.x, s.xref, s.nn_own) > (0.5 * self.skin) ** 2
+        # Only grains decide: global bodies are on every rank and never migrate
+        moved = max_displacement2(s.x, s.xref, s.nn_global, s.nn_own) > (0.5 * self.skin) ** 2
         flag = self.comm.allreduce(int(moved), op=MPI.MAX)
         if flag:
             with self.timers.phase("migration"):

@@ -133,6 +133,7 @@ class Store:
         self.nnode = int(self.nn.sum())
         self.nelem = int(self.ne.sum())
         self.nn_own = int(self.nn[: self.nb_own].sum())
+        self.nn_global = int(self.nn[self.isglobal == 1].sum())
         self.ne_own = int(self.ne[: self.nb_own].sum())
         self.node_body = np.repeat(np.arange(self.nbody, dtype=np.int64), self.nn)
         self.elem_body = np.repeat(np.arange(self.nbody, dtype=np.int64), self.ne)

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import tomllib
 
 from pdfem.errors import InputError
 from pdfem.scene import geometry as geo
@@ -141,6 +142,13 @@ def test_round_trip(tmp_path):
     assert again.to_toml_string() == text
     for k in s.grains:
         np.testing.assert_array_equal(again.grains[k], s.grains[k])
+
+
+def test_toml_writer_round_trip():
+    doc = {"top": [], "a": {"s": 'q"uo\\te \u00e9 \t\x7f', "f": [0.1, -1e-300, math.inf, 5e20],
+                          "i": -3, "b": True},
+           "t": {"x:y": {"k": 1}, "empty": {}}, "arr": [{"n": 1, "sub": {"m": 2}}, {"n": 2}]}
+    assert tomllib.loads(dumps(doc)) == doc
 
 
 def test_grains_csv(tmp_path):

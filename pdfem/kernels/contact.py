@@ -118,10 +118,11 @@ def _pair_normal(ox, oy, otag, k, ebnd, a, b):
 @njit(cache=True)
 def _width(ox, oy, k, tx, ty):
     """Extent of the overlap polygon along the unit tangent (tx, ty)."""
-    lo = ox[0] * tx + oy[0] * ty
-    hi = lo
+    lo = 0.0
+    hi = 0.0
+    # Coordinates relative to vertex 0 (the overlap is tiny next to |x|)
     for i in range(1, k):
-        s = ox[i] * tx + oy[i] * ty
+        s = (ox[i] - ox[0]) * tx + (oy[i] - oy[0]) * ty
         lo = min(lo, s)
         hi = max(hi, s)
     return hi - lo

@@ -108,10 +108,10 @@ def potential_energy(x, m, gx, gy, node_body, n1, out):
 
 
 @njit(cache=True)
-def max_displacement2(x, xref, n1):
-    """Largest squared distance of a node from its position at the last rebuild."""
+def max_displacement2(x, xref, n0, n1):
+    """Largest squared distance of nodes [n0, n1) from their positions at the last rebuild."""
     d2 = 0.0
-    for i in range(n1):
+    for i in range(n0, n1):
         dx = x[i, 0] - xref[i, 0]
         dy = x[i, 1] - xref[i, 1]
         r = dx * dx + dy * dy

@@ -4,8 +4,8 @@ A grain is tested as the convex polygon of NPOLY points on its ellipse, inflated
 centre by the relative INFLATE, so grains that touch count as overlapping. Two convex
 polygons are disjoint iff some edge normal of either separates them (separating axis
 theorem). The support of such a polygon has a closed form, so each pair costs NPOLY axes of
-a few flops, vectorised over all candidate pairs; candidates come from a uniform grid of
-cells as large as the largest grain bounding box.
+a few flops, vectorised over all candidate pairs; candidates are the pairs whose bounding
+boxes intersect, found with a uniform grid.
 """
 
 import numpy as np
@@ -34,47 +34,46 @@ def first_outside(lo, hi, box):
 
 
 def candidate_pairs(lo, hi):
-    """Pairs (i, j), i < j, whose boxes intersect (closed), sorted by (i, j).
+    """Pairs (i, j), i < j, whose boxes [lo, hi] intersect (closed), sorted by (i, j).
 
-    The boxes are binned by centre into square cells of the largest box extent, so two
-    intersecting boxes lie in the same or adjacent cells; only 5 of the 9 neighbour offsets
-    are visited, each unordered pair once.
+    Every box is entered in each cell of a uniform grid that it touches (cells of the median
+    box extent, coarsened while that makes more than 16 entries per box), so a few large
+    grains among many small ones cost little. Pairs are formed within cells and kept only in
+    the cell holding the lower-left corner of their intersection, hence once.
     """
     n = lo.shape[0]
     if n < 2:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    mid = 0.5 * (lo + hi)
-    size = float(np.max(hi - lo))
-    origin = mid.min(axis=0)
-    ij = np.floor((mid - origin) / size).astype(np.int64)
-    ny = int(ij[:, 1].max()) + 3
-    key = (ij[:, 0] + 1) * ny + (ij[:, 1] + 1)
-    # Sort grains by cell; start and count of each occupied cell
-    order = np.argsort(key, kind="stable")
-    skey = key[order]
-    cells, start, count = np.unique(skey, return_index=True, return_counts=True)
-    ii, jj = [], []
-    for dx, dy in ((0, 0), (1, -1), (1, 0), (1, 1), (0, 1)):
-        # The neighbour cell of every grain and its members
-        nkey = skey + dx * ny + dy
-        pos = np.searchsorted(cells, nkey)
-        pos = np.minimum(pos, cells.size - 1)
-        hit = cells[pos] == nkey
-        nmem = np.where(hit, count[pos], 0)
-        src = np.repeat(np.arange(n), nmem)
-        first = np.repeat(start[pos], nmem)
-        offs = np.arange(src.size) - np.repeat(np.cumsum(nmem) - nmem, nmem)
-        dst = first + offs
-        if dx == 0 and dy == 0:
-            keep = dst > src
-            src, dst = src[keep], dst[keep]
-        ii.append(order[src])
-        jj.append(order[dst])
-    i, j = np.concatenate(ii), np.concatenate(jj)
-    i, j = np.minimum(i, j), np.maximum(i, j)
-    # Keep pairs whose boxes intersect
+    # Cell size and the cell range of every box
+    size = float(np.median(np.max(hi - lo, axis=1)))
+    origin = lo.min(axis=0)
+    while True:
+        c0 = np.floor((lo - origin) / size).astype(np.int64)
+        c1 = np.floor((hi - origin) / size).astype(np.int64)
+        span = c1 - c0 + 1
+        k = span[:, 0] * span[:, 1]
+        if k.sum() <= 16 * n:
+            break
+        size *= 2.0
+    ny = int(c1[:, 1].max()) + 1
+    # One entry per (box, cell), sorted by cell
+    g = np.repeat(np.arange(n), k)
+    r = np.arange(g.size) - np.repeat(np.cumsum(k) - k, k)
+    cell = (c0[g, 0] + r // span[g, 1]) * ny + c0[g, 1] + r % span[g, 1]
+    order = np.argsort(cell, kind="stable")
+    cell, g = cell[order], g[order]
+    # Each entry pairs with the later entries of its cell
+    m = np.searchsorted(cell, cell, side="right") - np.arange(cell.size) - 1
+    src = np.repeat(np.arange(cell.size), m)
+    dst = src + 1 + np.arange(src.size) - np.repeat(np.cumsum(m) - m, m)
+    i, j, c = g[src], g[dst], cell[src]
+    # Intersecting boxes, counted in one cell only
     hit = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
-    i, j = i[hit], j[hit]
+    i, j, c = i[hit], j[hit], c[hit]
+    corner = np.floor((np.maximum(lo[i], lo[j]) - origin) / size).astype(np.int64)
+    once = corner[:, 0] * ny + corner[:, 1] == c
+    i, j = i[once], j[once]
+    i, j = np.minimum(i, j), np.maximum(i, j)
     srt = np.lexsort((j, i))
     return i[srt], j[srt]
 

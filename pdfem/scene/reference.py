@@ -8,8 +8,8 @@ import math
 
 from pdfem.scene import schema as S
 
-_TYPES = {"float": "float", "int": "int", "str": "string", "vec2": "[x, y]",
-          "box": "[x0, y0, x1, y1]", "strlist": "list of strings"}
+_TYPES = {"float": "float", "int": "int", "str": "string", "vec2": "[float, float]",
+          "box": "[float, float, float, float]", "strlist": "list of strings"}
 
 _INTRO = """\
 # Scene file reference
@@ -23,8 +23,10 @@ Indices count from 0. Integers are accepted where a float is expected, not the o
 
 Defaults: *required* keys must be given; *absent* keys stay absent unless given; all other
 defaults are filled into the **resolved scene**, which is stored in every output file and
-can be read back as a scene (`Scene.to_toml_string()`). Tables marked *effect* exist in a run
-only when present in the scene.
+can be read back as a scene (`Scene.to_toml_string()`); derived defaults (auto cell size and
+skin, intervals, the cap tension cut-off, boundary-condition dof) are stored as the values
+computed. Tables marked *effect* exist in a run only when present in the scene; so do
+`[walls]` and `[grains_file]`.
 
 Geometry at t=0: every grain's bounding box and every block lie inside `domain.box`; no two
 grains, no grain and block, and no two blocks overlap (blocks may touch). Grains are tested as

@@ -58,7 +58,8 @@ class Key:
     def range_text(self):
         """The allowed range in words: ``> 0``, ``[0, 0.5]``, ``one of "a", "b"``."""
         if self.choices:
-            return "one of " + ", ".join(f'"{c}"' for c in self.choices)
+            word = "each one of " if self.kind == "strlist" else "one of "
+            return word + ", ".join(f'"{c}"' for c in self.choices)
         lo, hi = self.lo, self.hi
         if lo is not None and hi is not None:
             left, right = "(" if self.lo_open else "[", ")" if self.hi_open else "]"
@@ -273,7 +274,11 @@ SECTIONS = [
     Section("grains", "array", "Elliptic grains, `[[grains]]`, one table each. Grains get ids "
             "0, 1, ... in scene order: these first, then the rows of grains_file.", GRAIN),
     Section("grains_file", "table", "Grains read from a file (alternative or in addition to "
-            "[[grains]]).", GRAINS_FILE),
+            "`[[grains]]`). CSV: a header line naming the columns (x, y, a, b required; angle, "
+            "vx, vy, material optional; any order), one grain per line; blank lines and lines "
+            "starting with # are skipped; an empty optional cell takes the default. npz: 1-D "
+            "arrays of the same names (strings for material), read without pickle. Errors "
+            "name the file and the line (CSV, from 1) or row (npz, from 0).", GRAINS_FILE),
     Section("blocks", "array", "Rectangular bodies (walls, hammer, chamber bottom), "
             "`[[blocks]]`, meshed nx by ny.", BLOCK),
     Section("bc", "array", "Boundary conditions, `[[bc]]`, on block nodes or on every node on a "

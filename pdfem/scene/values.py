@@ -133,8 +133,12 @@ def check_value(value, key: Key, path):
     try:
         return _check(value, key)
     except _Bad as exc:
-        where = path if exc.index is None else f"{path}[{exc.index}]"
-        raise SceneError(where, exc.msg) from None
+        raise _located(exc, path) from None
+
+
+def _located(exc, path):
+    """The SceneError of a _Bad value found at ``path``."""
+    return SceneError(path if exc.index is None else f"{path}[{exc.index}]", exc.msg)
 
 
 def table(value, path, what="a table"):
@@ -161,8 +165,8 @@ def check_table(value, keys, path, hint=""):
         if name in tbl:
             try:
                 out[name] = _check(tbl[name], key)
-            except _Bad:
-                check_value(tbl[name], key, join(path, name))
+            except _Bad as exc:
+                raise _located(exc, join(path, name)) from None
         elif key.default is REQUIRED:
             raise SceneError(join(path, name), "required key missing")
         elif key.default is OPTIONAL or isinstance(key.default, Derived):

@@ -1,0 +1,458 @@
+"""Sandler-Rubin cap plasticity (report section 6, eqs. 76-79): material point update.
+
+Sign convention: tension positive, compression negative. I1 = tr(sigma) with sigma_zz
+included (plane strain carries sigma_zz); J2 from the deviator of the full 3-D stress
+(xx, yy, zz, xy). Stress and strain-increment vectors are ordered (xx, yy, xy, zz) and the xy
+strain entry is the tensor component. Surfaces and hardening law: see cap_surface.py.
+
+Return algorithm (backward Euler, associated flow on every surface, in invariant space since
+the deviator keeps the direction of the trial deviator s_t):
+    cap (trial I1 < L):       nested scalar solves; outer Newton/bisection on kappa so that
+                              H(kappa) - H(kappa_n) = eps_v^p increment (consistent hardening),
+                              inner closest point on the ellipse of that kappa
+    envelope (I1 >= L):       scalar Newton on I1 (perfectly plastic, F(I1) convex)
+    envelope/cap corner:      when the envelope return would land at I1 < L(kappa): stress at
+                              I1 = L, J = F(L), both multipliers >= 0
+    tension cut-off I1 <= T:  I1 = T with s unchanged, or the T/envelope corner (I1 = T,
+                              J = F(T)) when J would exceed the envelope there
+Every mode has eps_v^p increment = (I1_trial - I1)/(3K).
+
+Dilatancy (flow on the envelope or the cut-off) retracts the cap through the same hardening
+law, but kappa never rises above max(kappa_n, 0) (Sandler-Rubin: L = min(kappa, 0), the cap
+stops retracting when L reaches the origin; McCormick table rows at +0.012) nor past the
+current stress I1 (so the envelope point stays on the envelope side of the corner).
+Dilatancy beyond those limits is kept in eps_v^p (st[1]) but not in kappa.
+
+Accuracy: the increment is split into substeps, their number growing with the normalised
+overshoot of the trial stress, so results hardly depend on the increment size.
+
+State row st (CAP_NST = 6): kappa, eps_v^p, eps^p (xx, yy, xy, zz).
+Status: 0 ok, 1 a local solve did not converge, 2 stress left outside the surface by more
+than tol (p[CAP_TOL], 1e-8 when 0) after the update, 3 non-finite input or result.
+"""
+
+import math
+
+from numba import njit
+
+from pdfem.kernels.cap_surface import (
+    cap_l,
+    cap_rho,
+    cap_x,
+    env_f,
+    env_slope,
+    hard_dh,
+    hard_h,
+    tension_limit,
+    x0,
+    yield_value,
+)
+from pdfem.kernels.params import (
+    BULK,
+    CAP_A,
+    CAP_B,
+    CAP_C,
+    CAP_D,
+    CAP_KAPPA0,
+    CAP_R,
+    CAP_T,
+    CAP_TOL,
+    CAP_W,
+    SHEAR,
+)
+
+CAP_NST = 6  # kappa, eps_v^p, eps^p xx, yy, xy, zz
+CAP_OK = 0
+CAP_NO_CONVERGENCE = 1
+CAP_OUTSIDE = 2
+CAP_NONFINITE = 3
+
+TOL_DEFAULT = 1e-8  # yield tolerance when p[CAP_TOL] is 0
+SUB_ETA = 0.02  # target normalised trial overshoot per substep
+NSUB_MAX = 2000  # substep cap
+MAXIT = 200  # iterations of every local scalar solve
+
+
+@njit(cache=True)
+def cap_initial_state(p, st):
+    """Initial state row: kappa = p[CAP_KAPPA0], no plastic strain."""
+    st[0] = p[CAP_KAPPA0]
+    for i in range(1, CAP_NST):
+        st[i] = 0.0
+
+
+@njit(cache=True)
+def cap_tolerance(p):
+    """Normalised yield tolerance: p[CAP_TOL], or 1e-8 when it is 0."""
+    return p[CAP_TOL] if p[CAP_TOL] > 0.0 else TOL_DEFAULT
+
+
+@njit(cache=True)
+def cap_yield_value(p, sig, st):
+    """Largest active normalised yield function at stress sig (4,) and state st (> 0: out)."""
+    i1 = sig[0] + sig[1] + sig[3]
+    m = i1 / 3.0
+    sx = sig[0] - m
+    sy = sig[1] - m
+    sz = sig[3] - m
+    j = math.sqrt(0.5 * (sx * sx + sy * sy + sz * sz) + sig[2] * sig[2])
+    return yield_value(p, i1, j, st[0])
+
+
+@njit(cache=True)
+def _envelope_i1(p, i1t, jt, kb, gs):
+    """I1 of the backward-Euler return onto the envelope; returns (I1, converged).
+
+    Root of r(I1) = I1 - I1t + (9K/G) (-F'(I1)) (Jt - F(I1)), increasing and convex on the
+    bracket [max(I1t - r(I1t), F^-1(Jt)), I1t], so Newton from the right converges.
+    """
+    q = 9.0 * kb / gs
+    sl = env_slope(p, i1t)
+    over = q * sl * (jt - env_f(p, i1t))
+    if over <= 0.0:
+        return i1t, True
+    # Bracket
+    hi = i1t
+    lo = i1t - over
+    a, b, c = p[CAP_A], p[CAP_B], p[CAP_C]
+    if jt < a and c > 0.0 and b > 0.0:
+        lo = max(lo, math.log((a - jt) / c) / b)
+    # Safeguarded Newton from the right end
+    x = hi
+    rtol = 1e-14 * (abs(i1t) + 3.0 * a)
+    for _ in range(MAXIT):
+        sl = env_slope(p, x)
+        fj = jt - env_f(p, x)
+        r = x - i1t + q * sl * fj
+        if abs(r) <= rtol:
+            return x, True
+        if r > 0.0:
+            hi = x
+        else:
+            lo = x
+        xn = x - r / (1.0 + q * (b * sl * fj + sl * sl))
+        if not (lo <= xn <= hi):
+            xn = 0.5 * (lo + hi)
+        if abs(xn - x) <= 1e-15 * (abs(x) + a):
+            return xn, True
+        x = xn
+    return x, False
+
+
+@njit(cache=True)
+def _dilate(p, kap, depv, lim, xa):
+    """Kappa after a dilatant eps_v^p increment depv >= 0, at most lim (>= kap)."""
+    if depv <= 0.0 or lim <= kap:
+        return kap
+    ht = hard_h(p, kap, xa) + depv
+    if hard_h(p, lim, xa) <= ht:
+        return lim
+    # H is increasing: safeguarded Newton on [kap, lim]
+    lo = kap
+    hi = lim
+    k = kap
+    for _ in range(MAXIT):
+        r = hard_h(p, k, xa) - ht
+        if r > 0.0:
+            hi = k
+        else:
+            lo = k
+        kn = k - r / hard_dh(p, k, xa)
+        if not (lo <= kn <= hi):
+            kn = 0.5 * (lo + hi)
+        if abs(kn - k) <= 1e-15 * (abs(k) + p[CAP_R] * p[CAP_A]):
+            return kn
+        k = kn
+    return k
+
+
+@njit(cache=True)
+def _corner_kappa(p, i1t, kap, xa, kb):
+    """Kappa at the envelope/cap corner: H(k) - H(kap) = (I1t - L(k))/(3K), k <= max(kap, 0)."""
+    if kap >= 0.0:
+        return kap, True
+    h0 = hard_h(p, kap, xa)
+    if hard_h(p, 0.0, xa) - h0 - i1t / (3.0 * kb) <= 0.0:
+        return 0.0, True
+    # phi is increasing on [kap, 0]: safeguarded Newton
+    lo = kap
+    hi = 0.0
+    k = kap
+    for _ in range(MAXIT):
+        r = hard_h(p, k, xa) - h0 - (i1t - k) / (3.0 * kb)
+        if r > 0.0:
+            hi = k
+        else:
+            lo = k
+        kn = k - r / (hard_dh(p, k, xa) + 1.0 / (3.0 * kb))
+        if not (lo <= kn <= hi):
+            kn = 0.5 * (lo + hi)
+        if abs(kn - k) <= 1e-15 * (abs(k) + p[CAP_R] * p[CAP_A]):
+            return kn, True
+        k = kn
+    return k, False
+
+
+@njit(cache=True)
+def _cap_point(p, i1t, jt, kap, kb, gs):
+    """Backward-Euler return onto the cap of fixed position kap; returns (I1, J, dI1/dkappa).
+
+    With s = 1/(1 + 9K dlam/rho): I1 - L = (I1t - L) s, J = Jt s/(c + (1 - c) s), c = G R^2/9K,
+    and s solves s sqrt((R Jt/(c + (1 - c) s))^2 + (I1t - L)^2) = rho (increasing in s).
+    """
+    r = p[CAP_R]
+    el = cap_l(kap)
+    dl = 1.0 if kap < 0.0 else 0.0
+    rho = cap_rho(p, kap)
+    a = i1t - el
+    c = gs * r * r / (9.0 * kb)
+    rj = r * jt
+    # Inside (s = 1), degenerate cap (s = 0), or safeguarded Newton on [0, 1]
+    mm = math.sqrt(rj * rj + a * a)
+    if mm <= rho:
+        return i1t, jt, 0.0
+    s = 0.0
+    if rho > 0.0:
+        s = rho / mm
+        lo = 0.0
+        hi = 1.0
+        gtol = 1e-15 * (mm + rho)
+        for _ in range(MAXIT):
+            w = c + (1.0 - c) * s
+            mm = math.sqrt((rj / w) ** 2 + a * a)
+            g = s * mm - rho
+            if abs(g) <= gtol:
+                break
+            if g > 0.0:
+                hi = s
+            else:
+                lo = s
+            dm = -(rj * rj) * (1.0 - c) / (mm * w * w * w)
+            sn = s - g / (mm + s * dm)
+            if not (lo < sn < hi):
+                sn = 0.5 * (lo + hi)
+            if hi - lo <= 1e-16:
+                s = sn
+                break
+            s = sn
+    w = c + (1.0 - c) * s
+    mm = math.sqrt((rj / w) ** 2 + a * a)
+    dm = -(rj * rj) * (1.0 - c) / (mm * w * w * w)
+    # Sensitivity of the return point to the cap position
+    drho = dl - 1.0 - r * env_slope(p, kap)
+    if rho <= 0.0:
+        drho = max(drho, 0.0)
+    dgdk = -s * a * dl / mm - drho
+    dsdk = -dgdk / (mm + s * dm)
+    return el + a * s, jt * s / w, dl * (1.0 - s) + a * dsdk
+
+
+@njit(cache=True)
+def _cap_return(p, i1t, jt, kap, xa, kb, gs):
+    """Cap return with consistent hardening; returns (I1, J, kappa, converged).
+
+    Root in (I1t, kap) of h(k) = H(k) - H(kap) + (I1(k) - I1t)/(3K): h(kap) > 0 and
+    h -> H(I1t) - H(kap) < 0 as k -> I1t (the cap then passes just above the trial I1).
+    """
+    h0 = hard_h(p, kap, xa)
+    lo = i1t
+    hi = kap
+    k = kap
+    htol = max(1e-13 * (cap_l(kap) - i1t) / (3.0 * kb), 4e-16 * (h0 + p[CAP_W]))
+    ktol = 1e-15 * (abs(kap) + abs(i1t) + p[CAP_R] * p[CAP_A])
+    for _ in range(MAXIT):
+        i1, j, di1 = _cap_point(p, i1t, jt, k, kb, gs)
+        h = hard_h(p, k, xa) - h0 + (i1 - i1t) / (3.0 * kb)
+        if abs(h) <= htol:
+            return i1, j, k, True
+        if h > 0.0:
+            hi = k
+        else:
+            lo = k
+        dh = hard_dh(p, k, xa) + di1 / (3.0 * kb)
+        kn = k - h / dh if dh > 0.0 else 0.5 * (lo + hi)
+        if not (lo < kn < hi):
+            kn = 0.5 * (lo + hi)
+        if abs(kn - k) <= ktol:
+            i1, j, di1 = _cap_point(p, i1t, jt, kn, kb, gs)
+            return i1, j, kn, True
+        k = kn
+    i1, j, di1 = _cap_point(p, i1t, jt, k, kb, gs)
+    return i1, j, k, False
+
+
+@njit(cache=True)
+def _trial(p, sig, d0, d1, d2, d3):
+    """Elastic trial stress sig + C:d as four scalars (same arithmetic as elastic_update)."""
+    g2 = 2.0 * p[SHEAR]
+    lam = p[BULK] - g2 / 3.0
+    dv = d0 + d1 + d3
+    return (sig[0] + (lam * dv + g2 * d0), sig[1] + (lam * dv + g2 * d1),
+            sig[2] + g2 * d2, sig[3] + (lam * dv + g2 * d3))
+
+
+@njit(cache=True)
+def _return_invariants(p, i1t, jt, kap, xa, tn):
+    """Plastic return in invariant space: (I1, J, kappa, converged, plastic)."""
+    kb = p[BULK]
+    gs = p[SHEAR]
+    el = cap_l(kap)
+    # Cap side of the corner
+    if i1t < el:
+        r = p[CAP_R]
+        if math.sqrt(r * r * jt * jt + (i1t - el) ** 2) <= cap_rho(p, kap):
+            return i1t, jt, kap, True, False
+        i1, j, kn, ok = _cap_return(p, i1t, jt, kap, xa, kb, gs)
+        return i1, j, kn, ok, True
+    # Envelope side: elastic, tension cut-off, tension corner or envelope
+    if i1t <= tn and jt <= env_f(p, i1t):
+        return i1t, jt, kap, True, False
+    envelope = True
+    i1 = i1t
+    j = jt
+    if i1t > tn:
+        ftn = env_f(p, tn)
+        if jt <= ftn:
+            i1 = tn
+            envelope = False
+        elif i1t - tn - 9.0 * kb * (jt - ftn) / gs * env_slope(p, tn) >= 0.0:
+            i1 = tn
+            j = ftn
+            envelope = False
+    ok = True
+    if envelope:
+        i1, ok = _envelope_i1(p, i1t, jt, kb, gs)
+        j = max(env_f(p, i1), 0.0)
+        # Past the corner: stress at I1 = L(kappa), J = F(L)
+        if i1 < el:
+            kn, ok = _corner_kappa(p, i1t, kap, xa, kb)
+            i1 = cap_l(kn)
+            return i1, env_f(p, i1), kn, ok, True
+    # Dilatancy retracts the cap, never past the origin or the stress
+    kn = _dilate(p, kap, (i1t - i1) / (3.0 * kb), max(kap, min(0.0, i1)), xa)
+    return i1, j, kn, ok, True
+
+
+@njit(cache=True)
+def _step(p, sig, st, d0, d1, d2, d3, xa, tn):
+    """One backward-Euler increment; updates sig, st in place; returns (converged, dwp)."""
+    kb = p[BULK]
+    g2 = 2.0 * p[SHEAR]
+    t0, t1, t2, t3 = _trial(p, sig, d0, d1, d2, d3)
+    i1t = t0 + t1 + t3
+    m = i1t / 3.0
+    s0 = t0 - m
+    s1 = t1 - m
+    s2 = t2
+    s3 = t3 - m
+    jt = math.sqrt(0.5 * (s0 * s0 + s1 * s1 + s3 * s3) + s2 * s2)
+    i1, j, kn, ok, plastic = _return_invariants(p, i1t, jt, st[0], xa, tn)
+    # Elastic: the trial stands
+    if not plastic:
+        sig[0] = t0
+        sig[1] = t1
+        sig[2] = t2
+        sig[3] = t3
+        return ok, 0.0
+    # Deviator scaled along the trial direction, new mean stress
+    f = j / jt if jt > 0.0 else 0.0
+    m = i1 / 3.0
+    sig[0] = f * s0 + m
+    sig[1] = f * s1 + m
+    sig[2] = f * s2
+    sig[3] = f * s3 + m
+    # Plastic strain increment C^-1:(trial - sigma) and its work sigma:deps^p
+    dv = (i1t - i1) / (3.0 * kb)
+    e0 = (1.0 - f) * s0 / g2
+    e1 = (1.0 - f) * s1 / g2
+    e2 = (1.0 - f) * s2 / g2
+    e3 = (1.0 - f) * s3 / g2
+    dwp = f * (s0 * e0 + s1 * e1 + s3 * e3 + 2.0 * s2 * e2) + m * dv
+    st[0] = kn
+    st[1] += dv
+    st[2] += e0 + dv / 3.0
+    st[3] += e1 + dv / 3.0
+    st[4] += e2
+    st[5] += e3 + dv / 3.0
+    return ok, dwp
+
+
+@njit(cache=True)
+def cap_update(p, sig, deps, st):
+    """Cap model update of stress sig (4,) in place for strain increment deps (4,).
+
+    p: parameter row (params.py columns BULK, SHEAR, CAP_A .. CAP_TOL); st: state row of
+    length CAP_NST (see cap_initial_state). Returns (status, dwp) with dwp = sigma:deps^p >= 0
+    the plastic work density increment. On a nonzero status the state is left as computed.
+    """
+    d0, d1, d2, d3 = deps[0], deps[1], deps[2], deps[3]
+    if not (math.isfinite(d0 + d1 + d2 + d3) and math.isfinite(sig[0] + sig[1] + sig[2]
+                                                                + sig[3] + st[0])):
+        return CAP_NONFINITE, 0.0
+    tol = cap_tolerance(p)
+    # Elastic trial: done when it is inside
+    t0, t1, t2, t3 = _trial(p, sig, d0, d1, d2, d3)
+    i1t = t0 + t1 + t3
+    m = i1t / 3.0
+    jt = math.sqrt(0.5 * ((t0 - m) ** 2 + (t1 - m) ** 2 + (t3 - m) ** 2) + t2 * t2)
+    over = yield_value(p, i1t, jt, st[0])
+    if over <= 0.0:
+        sig[0] = t0
+        sig[1] = t1
+        sig[2] = t2
+        sig[3] = t3
+        return CAP_OK, 0.0
+    # Substeps: more of them the further the trial lies outside
+    nsub = min(NSUB_MAX, 1 + int(over / SUB_ETA))
+    xa = x0(p)
+    tn = tension_limit(p)
+    w = 1.0 / nsub
+    dwp = 0.0
+    status = CAP_OK
+    for _ in range(nsub):
+        ok, dw = _step(p, sig, st, w * d0, w * d1, w * d2, w * d3, xa, tn)
+        dwp += dw
+        if not ok:
+            status = CAP_NO_CONVERGENCE
+    # Guards: finite, on or inside the surface
+    if not math.isfinite(sig[0] + sig[1] + sig[2] + sig[3] + st[0] + dwp):
+        return CAP_NONFINITE, dwp
+    if status == CAP_OK and cap_yield_value(p, sig, st) > tol:
+        status = CAP_OUTSIDE
+    return status, dwp
+
+
+def cap_check_params(p):
+    """Return '' when the cap parameters of row p are usable, else a short reason."""
+    kb, gs = p[BULK], p[SHEAR]
+    a, b, c, d, r, w = p[CAP_A], p[CAP_B], p[CAP_C], p[CAP_D], p[CAP_R], p[CAP_W]
+    vals = (kb, gs, a, b, c, d, r, w, p[CAP_KAPPA0], p[CAP_T], p[CAP_TOL])
+    # Finite values and positive moduli
+    if not all(math.isfinite(v) for v in vals):
+        return "cap parameters must be finite"
+    if kb <= 0.0 or gs <= 0.0:
+        return "bulk and shear moduli must be > 0"
+    # Envelope, cap and hardening constants
+    if not a > c >= 0.0:
+        return "need A > C >= 0"
+    if b < 0.0:
+        return "need B >= 0"
+    if d <= 0.0:
+        return "need D > 0"
+    if r <= 0.0:
+        return "need R > 0"
+    if not 0.0 < w < 1.0:
+        return "need 0 < W < 1"
+    # Tension cut-off between the origin and the envelope apex
+    t = p[CAP_T]
+    if t < 0.0:
+        return "need tension cut-off T >= 0"
+    if c > 0.0 and b > 0.0 and t > math.log(a / c) / b * (1.0 + 1e-12):
+        return f"tension cut-off T = {t:g} is beyond the envelope apex {math.log(a / c) / b:g}"
+    # Initial cap must cross the I1 axis on the compressive side
+    if cap_x(p, p[CAP_KAPPA0]) > 1e-12 * r * a:
+        return "initial cap X(kappa0) = kappa0 - R F(kappa0) must be <= 0"
+    if not 0.0 <= p[CAP_TOL] < 1e-2:
+        return "tol must be in [0, 1e-2)"
+    return ""
+

@@ -1,0 +1,107 @@
+"""The real command line: bit-identical run files on 1-4 ranks, bad scenes, output safety."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from tests.scenes import drifting_grains
+
+ROOT = Path(__file__).resolve().parents[2]
+MPIRUN = ["bash", str(ROOT / "jobs" / "mpirun.sh")]
+
+
+def pdfem(args, cwd, ranks=None, timeout=300):
+    """Run ``python -m pdfem`` (under mpirun when ranks is given); return the process."""
+    cmd = [sys.executable, "-m", "pdfem"] + list(args)
+    if ranks:
+        cmd = MPIRUN + ["-n", str(ranks)] + cmd
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    return subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout,
+                          env=env)
+
+
+def datasets(path):
+    """Every dataset of an HDF5 file as {name: array}."""
+    out = {}
+    with h5py.File(path) as f:
+        f.visititems(lambda n, o: out.__setitem__(n, o[()])
+                     if isinstance(o, h5py.Dataset) else None)
+    return out
+
+
+def test_bit_identical_on_1_2_3_4_ranks(tmp_path):
+    (tmp_path / "s.toml").write_text(drifting_grains(n=16, end=3e-6, extra="[gravity]\n"
+                                                     "g = [0.0, -9.81e6]\n[damping]\n"
+                                                     "gamma = 1.0e5\n"))
+    ref = None
+    for n in (1, 2, 3, 4):
+        p = pdfem(["run", "s.toml", "-o", f"r{n}.h5", "--quiet"], tmp_path, ranks=n)
+        assert p.returncode == 0, p.stderr
+        d = datasets(tmp_path / f"r{n}.h5")
+        if ref is None:
+            ref = d
+            assert len(ref["frames/time"]) >= 4
+            continue
+        assert sorted(d) == sorted(ref)
+        for k in ref:
+            assert np.array_equal(ref[k], d[k]), f"{k} differs on {n} ranks"
+
+
+BAD = {
+    "unknown table": "[nonsense]\nx = 1\n",
+    "unknown key": "[time]\nend = 1e-6\nbogus = 2\n",
+    "wrong type": "[time]\nend = 'soon'\n",
+    "negative end": "[time]\nend = -1.0\n",
+    "nan": "[time]\nend = nan\n",
+    "safety above stable": "[time]\nend = 1e-6\nsafety = 1.5\n",
+    "missing material": "[[grains]]\ncenter = [0.001, 0.001]\naxes = [1e-4, 1e-4]\n"
+                        "material = 'steel'\n",
+    "outside domain": "[[grains]]\ncenter = [-0.5, 0.001]\naxes = [1e-4, 1e-4]\n"
+                      "material = 'grain'\n",
+    "overlap": "[[grains]]\ncenter = [0.003, 0.003]\naxes = [4e-4, 4e-4]\nmaterial = 'grain'\n"
+               "[[grains]]\ncenter = [0.0032, 0.003]\naxes = [4e-4, 4e-4]\nmaterial = 'grain'\n",
+    "zero density": "[materials.soft]\ndensity = 0.0\nbulk = 1e9\nshear = 1e9\n",
+    "bad rule": "[element]\nrule = '3x3'\n",
+    "missing grains file": "[grains_file]\npath = 'nowhere.csv'\nmaterial = 'grain'\n",
+    "bc on unknown body": "[[bc]]\nbody = 'anvil'\ntype = 'fixed'\n",
+}
+
+
+def _base():
+    text = drifting_grains(n=2, end=1e-7)
+    return text
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_scene_one_line_exit_2(tmp_path, case):
+    base = _base()
+    # Replace or add the faulty table
+    if BAD[case].startswith("[time]"):
+        base = base.replace("[time]\nend = 1e-07\nsafety = 0.5\n", "")
+    if BAD[case].startswith("[element]"):
+        base = base.replace('[element]\nrule = "1pt"\nlevel = 1\n', "")
+    (tmp_path / "bad.toml").write_text(base + "\n" + BAD[case])
+    p = pdfem(["run", "bad.toml", "--quiet"], tmp_path)
+    assert p.returncode == 2, (case, p.stdout, p.stderr)
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+    assert "bad.toml" in lines[0]
+    assert not list(tmp_path.glob("*.h5*"))
+
+
+def test_missing_scene_file_and_existing_output(tmp_path):
+    p = pdfem(["run", "absent.toml"], tmp_path)
+    assert p.returncode == 2 and "absent.toml" in p.stderr and "Traceback" not in p.stderr
+    (tmp_path / "s.toml").write_text(drifting_grains(n=2, end=1e-7, out="keep.h5"))
+    (tmp_path / "keep.h5").write_bytes(b"precious")
+    p = pdfem(["run", "s.toml", "--quiet"], tmp_path)
+    assert p.returncode == 2 and "--force" in p.stderr
+    assert (tmp_path / "keep.h5").read_bytes() == b"precious"
+    p = pdfem(["run", "s.toml", "--quiet", "--force"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert h5py.is_hdf5(tmp_path / "keep.h5")

@@ -16,6 +16,7 @@ from mpi4py import MPI
 from partition import CellGrid, partition
 from pdfem import build
 from pdfem.effects import active_effects
+from pdfem.effects.contact import check_contact_scene
 from pdfem.errors import SimulationError
 from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
@@ -32,6 +33,8 @@ class Simulation:
         r = scene.resolved
         self.scene, self.comm, self.resolved = scene, comm, r
         self.timers = Timers()
+        self._fail_msg = ""
+        check_contact_scene(r)
         self.effects = active_effects(r, scene)
         self.effect_names = [e.name for e in self.effects]
         damping = [e for e in self.effects if e.name == "damping"]
@@ -57,6 +60,7 @@ class Simulation:
         self._build_initial(scene, init_state)
         for eff in self.effects:
             eff.setup(self)
+        self._fail_msg = ""
         # Forces at t = 0 and the first half step
         self.t, self.nstep = 0.0, 0
         self.du = np.zeros_like(self.store.v)
@@ -151,7 +155,12 @@ class Simulation:
             bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
                                       s.mst, s.hgq, self.hg_coef, 0, s.ne_own, self.f, s.ewint,
                                       s.ewp)
-        self._bad_element = bad
+        if bad >= 0:
+            self.fail(f"element {s.elem_loc[bad]} of body {s.elem_gid[bad]} is inverted or "
+                      "its material update failed")
+        for eff in self.effects:
+            if hasattr(eff, "contact_forces"):
+                eff.contact_forces(self)
         for eff in self.effects:
             eff.body_force(self)
 
@@ -159,30 +168,28 @@ class Simulation:
         """Global stable step times the safety factor, clipped to the next event; guards."""
         s = self.store
         dt_loc = q4_stable_dt(s.x, s.conn, s.emat, self.mat_params, 0, s.ne_own)
+        limiter = "the element wave speed"
         for eff in self.effects:
             if hasattr(eff, "stable_dt"):
-                dt_loc = min(dt_loc, eff.stable_dt(self))
-        err = 1.0 if self._bad_element >= 0 else 0.0
-        red = np.array([-dt_loc, err])
+                d = eff.stable_dt(self)
+                if d < dt_loc:
+                    dt_loc, limiter = d, f"the {eff.name} stiffness"
+        if dt_loc < self.dt_min and not self._fail_msg:
+            self.fail(f"stable dt {dt_loc:.3e} s (limited by {limiter}) is below time.dt_min "
+                      f"{self.dt_min:.3e} s")
+        red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0])
         self.comm.Allreduce(MPI.IN_PLACE, red, op=MPI.MAX)
         if red[1] > 0:
-            self._fail_bad_element()
+            msgs = [m for m in self.comm.allgather(self._fail_msg) if m]
+            raise SimulationError(f"step {self.nstep}, t={self.t:.6e} s: {msgs[0]}")
         dt_stable = -red[0]
-        if dt_stable < self.dt_min:
-            raise SimulationError(f"step {self.nstep}, t={self.t:.6e} s: stable dt "
-                                  f"{dt_stable:.3e} s is below time.dt_min {self.dt_min:.3e} s")
         # No clipping to output times: an abrupt change of dt would spoil the energy identity
         return min(self.safety * dt_stable, self.dt_max)
 
-    def _fail_bad_element(self):
-        s = self.store
-        msg = ""
-        if self._bad_element >= 0:
-            e = self._bad_element
-            msg = (f"step {self.nstep}, t={self.t:.6e} s: element {s.elem_loc[e]} of body "
-                   f"{s.elem_gid[e]} is inverted or its material update failed")
-        msgs = [m for m in self.comm.allgather(msg) if m]
-        raise SimulationError(msgs[0])
+    def fail(self, msg):
+        """Record a failed check; all ranks stop together at the end of the step."""
+        if not self._fail_msg:
+            self._fail_msg = msg
 
     def advance_velocities(self, first=False):
         """Eq. 68 with the average of the two half steps; BCs, damping, kinetic energy."""

@@ -86,3 +86,45 @@ dof = "x"
 velocity = [{v}, 0.0]
 {extra}
 """
+
+
+def collision(v=20.0, end=4e-6, kn0=1.0e16, dmax=2.0e-5, mu=0.0, rule="1pt", level=2,
+              out="run.h5", extra=""):
+    """Two equal round grains flying at each other along x (frictionless unless mu > 0)."""
+    return f"""
+[domain]
+box = [0.0, 0.0, 0.004, 0.002]
+cell_size = 1.0e-3
+skin = 5.0e-5
+
+[time]
+end = {end}
+safety = 0.5
+
+[element]
+rule = "{rule}"
+level = {level}
+
+[contact]
+kn0 = {kn0}
+delta_max = {dmax}
+friction = {mu}
+
+[output]
+path = "{out}"
+interval = {end / 4}
+energy_interval = {end / 40}
+{ELASTIC}
+[[grains]]
+center = [0.00155, 0.001]
+axes = [4.0e-4, 4.0e-4]
+material = "grain"
+velocity = [{v}, 0.0]
+
+[[grains]]
+center = [0.00245, 0.001]
+axes = [4.0e-4, 4.0e-4]
+material = "grain"
+velocity = [{-v}, 0.0]
+{extra}
+"""

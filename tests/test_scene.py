@@ -3,11 +3,11 @@
 import copy
 import math
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
 import pytest
-import tomllib
 
 from pdfem.errors import InputError
 from pdfem.scene import geometry as geo

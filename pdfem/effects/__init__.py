@@ -4,12 +4,14 @@ An effect exists in a run only when the scene names it (its table is present); o
 it is never constructed: no array, no kernel call. Tests parametrise over ``REGISTRY``.
 """
 
+from pdfem.effects.contact import Contact
 from pdfem.effects.damping import Damping
 from pdfem.effects.gravity import Gravity
 
 REGISTRY = {
     "gravity": Gravity,
     "damping": Damping,
+    "contact": Contact,
 }
 
 

@@ -38,6 +38,7 @@ from numba import njit
 from pdfem.kernels.cap_surface import (
     cap_l,
     cap_rho,
+    cap_side,
     cap_x,
     env_f,
     env_slope,
@@ -68,7 +69,7 @@ CAP_OUTSIDE = 2
 CAP_NONFINITE = 3
 
 TOL_DEFAULT = 1e-8  # yield tolerance when p[CAP_TOL] is 0
-SUB_ETA = 0.02  # target normalised trial overshoot per substep
+SUB_ETA = 0.01  # target normalised trial overshoot per substep
 NSUB_MAX = 2000  # substep cap
 MAXIT = 200  # iterations of every local scalar solve
 
@@ -298,7 +299,7 @@ def _return_invariants(p, i1t, jt, kap, xa, tn):
     gs = p[SHEAR]
     el = cap_l(kap)
     # Cap side of the corner
-    if i1t < el:
+    if cap_side(p, i1t, kap):
         r = p[CAP_R]
         if math.sqrt(r * r * jt * jt + (i1t - el) ** 2) <= cap_rho(p, kap):
             return i1t, jt, kap, True, False

@@ -61,6 +61,18 @@ def cap_l(kap):
 
 
 @njit(cache=True)
+def cap_side(p, i1, kap):
+    """True when I1 is on the cap side of the corner: I1 < L beyond round-off.
+
+    A point within 1e-12 (|L| + R A) of L counts as the envelope side. This matters only for
+    kappa > 0, where the surface has a step at I1 = 0 and the envelope/cap corner (0, F(0)),
+    recomposed from components, must not fall onto the much smaller cap by round-off.
+    """
+    el = cap_l(kap)
+    return i1 < el - 1e-12 * (abs(el) + p[CAP_R] * p[CAP_A])
+
+
+@njit(cache=True)
 def cap_x(p, kap):
     """Cap intersection with the I1 axis, X = kappa - R F(kappa)."""
     return kap - p[CAP_R] * env_f(p, kap)
@@ -111,9 +123,9 @@ def yield_value(p, i1, j, kap):
     fractions of the shear strength scale A.
     """
     a = p[CAP_A]
-    el = cap_l(kap)
     # Cap for I1 < L, envelope otherwise
-    if i1 < el:
+    if cap_side(p, i1, kap):
+        el = cap_l(kap)
         r = p[CAP_R]
         v = (math.sqrt(r * r * j * j + (i1 - el) ** 2) - cap_rho(p, kap)) / (r * a)
     else:

@@ -7,11 +7,11 @@ lives in :mod:`pdfem.scene.schema`; docs/scene-reference.md is generated from it
 ``python -m pdfem.scene.reference``.
 """
 
+import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import tomllib
 
 from pdfem.errors import InputError
 from pdfem.scene.toml_out import dumps

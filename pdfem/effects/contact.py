@@ -1,0 +1,277 @@
+"""Contact between bodies (report sec. 5): the overlap law, found on the cell grid.
+
+Detection has two levels. At every rebuild the cell grid gives candidate grain pairs: grains
+in the same or neighbouring cells whose bounding boxes (inflated by the skin) overlap; no pair
+can come into contact before the next rebuild, since rebuilds happen whenever a node has moved
+half the skin. Every step, the boundary elements of candidate pairs whose boxes overlap are
+clipped against each other (pdfem.kernels.contact). Blocks (global bodies) are checked against
+every owned grain each step; domain walls against every owned boundary element.
+
+Bit-for-bit reproducibility: each pair is evaluated in canonical orientation (lower global key
+first) by every rank that owns one side; forces are added to owned nodes in the order of the
+contact keys (gid_a, elem_a, gid_b, elem_b). A block's nodes receive the forces of contacts
+computed on every rank, so those contributions are gathered and every rank adds all of them
+in key order. Contact history (the elastic shear displacement) is kept per key, sorted, and
+travels with a grain when it migrates.
+"""
+
+import numpy as np
+from mpi4py import MPI
+
+from pdfem.effects.base import Effect
+from pdfem.errors import InputError
+from pdfem.kernels import contact_law as L
+from pdfem.kernels.contact import (
+    C_ACTIVE,
+    NRES,
+    R_DELTA,
+    R_DISS,
+    R_ENERGY,
+    accumulate_sorted,
+    contact_dt_min,
+    element_pair_forces,
+    element_wall_forces,
+)
+from pdfem.kernels.integrate import ACC_FRIC
+from pdfem.kernels.neighbours import body_boxes, grain_pairs, lookup_sorted
+from pdfem.kernels.overlap import candidate_pairs, element_bboxes
+from pdfem.parallel.exchange import body_centroids
+from pdfem.parallel.mpi import allgather_rows
+
+# Beyond RCAP * delta_max the hardening law continues along its tangent (see contact_law)
+RCAP = 0.95
+# Outward normals of the domain walls (pointing into the domain) and their box coordinate
+WALL_SIDES = {"left": ((1.0, 0.0), 0), "bottom": ((0.0, 1.0), 1), "right": ((-1.0, 0.0), 2),
+              "top": ((0.0, -1.0), 3)}
+
+
+def _lexorder(keys):
+    """Indices sorting (n, 4) int64 keys lexicographically (stable)."""
+    return np.lexsort((keys[:, 3], keys[:, 2], keys[:, 1], keys[:, 0]))
+
+
+class Contact(Effect):
+    """The report's frictional, no-tension, hardening contact (scene tables [contact], [walls])."""
+
+    name = "contact"
+
+    def __init__(self, table, scene):
+        super().__init__(table, scene)
+        names = list(scene.materials)
+        nmat = len(names)
+        self.law = np.zeros((nmat, nmat, L.NPAR))
+        # Per material pair law parameters: the [contact] values, overridden per pair
+        for i, a in enumerate(names):
+            for j, b in enumerate(names):
+                over = table["pairs"].get(f"{a}:{b}", table["pairs"].get(f"{b}:{a}", {}))
+                row = self.law[i, j]
+                row[L.P_KN0] = over.get("kn0", table["kn0"])
+                row[L.P_DMAX] = over.get("delta_max", table["delta_max"])
+                row[L.P_KS] = over.get("ks", table["ks"])
+                row[L.P_MU] = over.get("friction", table["friction"])
+                row[L.P_RCAP] = RCAP
+        self.delta_max = float(self.law[:, :, L.P_DMAX].max())
+        # Domain walls: the contact law of the [contact] table with the wall friction
+        box = scene.resolved["domain"]["box"]
+        walls = scene.resolved.get("walls", {})
+        self.walls = []
+        for side, (normal, coord) in WALL_SIDES.items():
+            kind = walls.get(side, "none")
+            if kind == "none":
+                continue
+            p0 = np.array([box[0], box[1]]) if coord < 2 else np.array([box[2], box[3]])
+            mu = walls["friction"] if kind == "frictional" else 0.0
+            self.walls.append((p0, np.array(normal), mu))
+        self.friction = bool(self.law[:, :, L.P_MU].max() > 0 or any(w[2] > 0 for w in self.walls))
+        self.gpairs = np.zeros((0, 2), np.int64)
+        self._out = np.zeros((1024, 2), np.int64)
+        self._last = None
+
+    def setup(self, sim):
+        self.after_rebuild(sim)
+
+    # ------------------------------------------------------------------ detection
+    def after_rebuild(self, sim):
+        """Candidate grain pairs from the cell grid (first level of detection)."""
+        s, g0 = sim.store, sim.nglobal
+        n = s.nbody - g0
+        cent = np.empty((n, 2))
+        body_centroids(s.x, s.nstart, s.nn, g0, s.nbody, cent)
+        cells = sim.grid.cell_of(cent) if n else np.zeros(0, np.int64)
+        bbox = np.empty((s.nelem, 4))
+        element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
+        boxes = np.empty((s.nbody, 4))
+        body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
+        owned = (np.arange(g0, s.nbody) < s.nb_own).astype(np.int8)
+        pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], sim.grid.nx, sim.grid.ny,
+                            sim.skin)
+        self.gpairs = pairs + g0
+
+    def _body_pairs(self, sim, boxes):
+        """Grain pairs of the last rebuild, plus owned grains near each block, block pairs."""
+        s, g0 = sim.store, sim.nglobal
+        parts = [self.gpairs]
+        own = np.arange(g0, s.nb_own)
+        for g in range(g0):
+            b = boxes[g]
+            near = own[(boxes[own, 0] <= b[2]) & (boxes[own, 2] >= b[0])
+                       & (boxes[own, 1] <= b[3]) & (boxes[own, 3] >= b[1])]
+            parts.append(np.stack([near, np.full(near.shape[0], g)], axis=1))
+            for h in range(g + 1, g0):
+                parts.append(np.array([[g, h]], np.int64))
+        return np.concatenate(parts).astype(np.int64)
+
+    def _element_pairs(self, sim, bbox, bpairs):
+        """Boundary-element pairs of the candidate bodies whose boxes overlap."""
+        s = sim.store
+        e0, e1 = s.estart, s.estart + s.ne
+        while True:
+            n = candidate_pairs(bbox, s.ebnd, s.elem_gid, s.elem_loc, e0, e1, bpairs, 0.0,
+                                self._out)
+            if n <= self._out.shape[0]:
+                return self._out[:n].copy()
+            self._out = np.zeros((2 * n, 2), np.int64)
+
+    def _wall_elements(self, sim, bbox):
+        """(elements, wall index) of owned boundary elements crossing a wall line."""
+        s = sim.store
+        cand = np.nonzero(s.ebnd[: s.ne_own].any(axis=1))[0]
+        els, ws = [], []
+        for w, (p0, n, _) in enumerate(self.walls):
+            # Lowest value of n.(p - p0) over the element box corners
+            lo = np.minimum(n[0] * (bbox[cand, 0] - p0[0]), n[0] * (bbox[cand, 2] - p0[0])) + \
+                np.minimum(n[1] * (bbox[cand, 1] - p0[1]), n[1] * (bbox[cand, 3] - p0[1]))
+            sel = cand[lo < 0.0]
+            els.append(sel)
+            ws.append(np.full(sel.shape[0], w, np.int64))
+        if not els:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return np.concatenate(els), np.concatenate(ws)
+
+    # ------------------------------------------------------------------ forces
+    def contact_forces(self, sim):
+        """Evaluate every contact this rank needs and add the forces in key order."""
+        s = sim.store
+        with sim.timers.phase("contact_detection"):
+            bbox = np.empty((s.nelem, 4))
+            element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
+            boxes = np.empty((s.nbody, 4))
+            body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
+            pairs = self._element_pairs(sim, bbox, self._body_pairs(sim, boxes))
+            welems, wids = self._wall_elements(sim, bbox)
+        with sim.timers.phase("contact_forces"):
+            self._evaluate(sim, pairs, welems, wids)
+
+    def _evaluate(self, sim, pairs, welems, wids):
+        s = sim.store
+        npair, nwall = pairs.shape[0], welems.shape[0]
+        n = npair + nwall
+        # Global keys: (gid_a, elem_a, gid_b, elem_b); a wall is (gid, elem, -1 - wall, 0)
+        keys = np.empty((n, 4), np.int64)
+        a, b = pairs[:, 0], pairs[:, 1]
+        keys[:npair] = np.stack([s.elem_gid[a], s.elem_loc[a], s.elem_gid[b], s.elem_loc[b]], 1)
+        keys[npair:] = np.stack([s.elem_gid[welems], s.elem_loc[welems], -1 - wids,
+                                 np.zeros(nwall, np.int64)], 1)
+        order = _lexorder(keys)
+        us_in = np.empty(n)
+        lookup_sorted(keys, order, s.hkey, s.hval, us_in)
+        # Law parameters of each contact's material pair (walls: the pair with itself)
+        params = np.empty((n, L.NPAR))
+        params[:npair] = self.law[s.emat[a], s.emat[b]]
+        params[npair:] = self.law[s.emat[welems], s.emat[welems]]
+        for w, (_, _, mu) in enumerate(self.walls):
+            params[npair:][wids == w, L.P_MU] = mu
+        active = np.empty(n, np.int8)
+        nodes = np.empty((n, 4), np.int64)
+        weights = np.empty((n, 4))
+        fa = np.empty((n, 2))
+        us_out = np.empty(n)
+        res = np.empty((n, NRES))
+        sl = slice(0, npair)
+        bad = element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, pairs,
+                                  params[sl], us_in[sl], active[sl], nodes[sl], weights[sl],
+                                  fa[sl], us_out[sl], res[sl])
+        sl = slice(npair, n)
+        if nwall:
+            p0 = np.array([self.walls[w][0] for w in wids]).reshape(-1, 2)
+            nrm = np.array([self.walls[w][1] for w in wids]).reshape(-1, 2)
+            bad += element_wall_forces(s.x, sim.du, s.conn, s.ebnd, welems, p0, nrm, params[sl],
+                                       us_in[sl], active[sl], nodes[sl], weights[sl], fa[sl],
+                                       us_out[sl], res[sl])
+        self._check(sim, keys, active, res, bad)
+        self._apply(sim, keys, order, active, nodes, weights, fa, pairs, welems)
+        self._bookkeeping(sim, keys, order, active, us_out, res, pairs, welems)
+        self._last = (active, nodes, res)
+
+    def _check(self, sim, keys, active, res, bad):
+        """Guards: a degenerate overlap, or an overlap deeper than delta_max."""
+        deep = (active == C_ACTIVE) & (res[:, R_DELTA] > self.delta_max)
+        if bad or deep.any():
+            p = int(np.nonzero((active < 0) | deep)[0][0])
+            k = keys[p]
+            what = "deeper than contact.delta_max" if deep[p] else "degenerate (one element " \
+                "inside the other)"
+            other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
+            sim.fail(f"contact between body {k[0]} element {k[1]} and {other} is {what}")
+
+    def _apply(self, sim, keys, order, active, nodes, weights, fa, pairs, welems):
+        """Add forces to owned nodes in key order; block-side forces gathered from all ranks."""
+        s = sim.store
+        npair = pairs.shape[0]
+        isg = s.isglobal[s.elem_body]
+        mixed = np.zeros(active.shape[0], bool)
+        mixed[:npair] = isg[pairs[:, 0]] != isg[pairs[:, 1]]
+        local_nodes = nodes.copy()
+        # Canonical orientation puts the grain (lower gid) first: its block side is gathered
+        local_nodes[mixed, 2:] = -1
+        sel = np.nonzero(mixed & (active == C_ACTIVE))[0]
+        rows = np.concatenate([keys[sel], nodes[sel], weights[sel], fa[sel]], axis=1)
+        rows[:, 4:6] = -1
+        if sim.nglobal == 0:
+            got = rows
+        else:
+            got = allgather_rows(sim.comm, rows) if sim.comm.size > 1 else rows
+        k_all = np.concatenate([keys, got[:, 0:4].astype(np.int64)])
+        n_all = np.concatenate([local_nodes, got[:, 4:8].astype(np.int64)])
+        w_all = np.concatenate([weights, got[:, 8:12]])
+        f_all = np.concatenate([fa, got[:, 12:14]])
+        a_all = np.concatenate([active, np.full(got.shape[0], C_ACTIVE, np.int8)])
+        accumulate_sorted(_lexorder(k_all), a_all, n_all, w_all, f_all, s.nn_own, sim.f)
+
+    def _bookkeeping(self, sim, keys, order, active, us_out, res, pairs, welems):
+        """New history table; contact energy and friction per body of side A (counted once)."""
+        s = sim.store
+        on = order[active[order] == C_ACTIVE]
+        s.hkey, s.hval = keys[on], us_out[on]
+        body_a = np.concatenate([s.elem_body[pairs[:, 0]], s.elem_body[welems]])[on]
+        mine = body_a < s.nb_own
+        if sim.comm.rank != 0:
+            mine &= s.isglobal[body_a] == 0
+        self.energy = np.zeros(s.nbody)
+        np.add.at(self.energy, body_a[mine], res[on[mine], R_ENERGY])
+        np.add.at(s.acc[:, ACC_FRIC], body_a[mine], res[on[mine], R_DISS])
+
+    # ------------------------------------------------------------------ step size, energy
+    def stable_dt(self, sim):
+        """Smallest stable step of the active contacts (their stiffness hardens)."""
+        if self._last is None:
+            return np.inf
+        active, nodes, res = self._last
+        return contact_dt_min(active, nodes, res, sim.store.m)
+
+    def energy_terms(self, sim, out):
+        e = getattr(self, "energy", None)
+        out["contact"] = e[: sim.store.nb_own] if e is not None and e.shape[0] >= \
+            sim.store.nb_own else np.zeros(sim.store.nb_own)
+
+
+def count_contacts(comm, active):
+    """Number of active contacts over all ranks (diagnostic)."""
+    return comm.allreduce(int((active == C_ACTIVE).sum()), op=MPI.SUM)
+
+
+def check_contact_scene(resolved):
+    """Walls need the law of the [contact] table."""
+    walls = resolved.get("walls", {})
+    if any(walls.get(s, "none") != "none" for s in WALL_SIDES) and "contact" not in resolved:
+        raise InputError("walls: contact walls need the [contact] table (kn0, delta_max)")

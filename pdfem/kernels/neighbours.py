@@ -1,0 +1,100 @@
+"""First-level contact detection on the cell grid, and contact-history lookup by key."""
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def body_boxes(bbox, estart, ne, b0, b1, out):
+    """Bounding box of the elements of each body [b0, b1) (rows xmin, ymin, xmax, ymax)."""
+    for b in range(b0, b1):
+        out[b, 0] = np.inf
+        out[b, 1] = np.inf
+        out[b, 2] = -np.inf
+        out[b, 3] = -np.inf
+        for e in range(estart[b], estart[b] + ne[b]):
+            out[b, 0] = min(out[b, 0], bbox[e, 0])
+            out[b, 1] = min(out[b, 1], bbox[e, 1])
+            out[b, 2] = max(out[b, 2], bbox[e, 2])
+            out[b, 3] = max(out[b, 3], bbox[e, 3])
+
+
+@njit(cache=True)
+def grain_pairs(cell, owned, box, nx, ny, skin):
+    """Candidate grain pairs: grains in the same or neighbouring cells whose boxes are within
+    ``skin``; at least one grain of each pair is owned. cell (n,) is each grain's centroid
+    cell (-1 to ignore), owned (n,) a 0/1 flag, box (n, 4). Returns (m, 2) local indices."""
+    n = cell.shape[0]
+    ncell = nx * ny
+    # Counting sort of grains by cell
+    count = np.zeros(ncell + 1, np.int64)
+    for i in range(n):
+        if cell[i] >= 0:
+            count[cell[i] + 1] += 1
+    for c in range(ncell):
+        count[c + 1] += count[c]
+    order = np.empty(n, np.int64)
+    fill = count[:-1].copy()
+    for i in range(n):
+        if cell[i] >= 0:
+            order[fill[cell[i]]] = i
+            fill[cell[i]] += 1
+    # Owned grains against the 3x3 block of cells around them
+    cap = 16 * n + 16
+    out = np.empty((cap, 2), np.int64)
+    m = 0
+    for i in range(n):
+        if owned[i] == 0 or cell[i] < 0:
+            continue
+        cx = cell[i] % nx
+        cy = cell[i] // nx
+        for dy in range(-1, 2):
+            for dx in range(-1, 2):
+                jx = cx + dx
+                jy = cy + dy
+                if jx < 0 or jy < 0 or jx >= nx or jy >= ny:
+                    continue
+                c = jx + nx * jy
+                for k in range(count[c], count[c + 1]):
+                    j = order[k]
+                    if j == i or (owned[j] == 1 and j < i):
+                        continue
+                    if (box[i, 0] - skin > box[j, 2] or box[j, 0] - skin > box[i, 2]
+                            or box[i, 1] - skin > box[j, 3] or box[j, 1] - skin > box[i, 3]):
+                        continue
+                    if m == cap:
+                        grown = np.empty((2 * cap, 2), np.int64)
+                        grown[:m] = out[:m]
+                        out = grown
+                        cap *= 2
+                    out[m, 0] = i
+                    out[m, 1] = j
+                    m += 1
+    return out[:m]
+
+
+@njit(cache=True)
+def _less(a, i, b, j):
+    """Lexicographic a[i] < b[j] over 4 int64 columns."""
+    for c in range(4):
+        if a[i, c] != b[j, c]:
+            return a[i, c] < b[j, c]
+    return False
+
+
+@njit(cache=True)
+def lookup_sorted(keys, order, hkey, hval, out):
+    """out[order[k]] = hval of the row of hkey equal to keys[order[k]] (0 if none).
+
+    keys[order] and hkey must both be sorted lexicographically: one merge pass.
+    """
+    j = 0
+    nh = hkey.shape[0]
+    for k in range(order.shape[0]):
+        p = order[k]
+        while j < nh and _less(hkey, j, keys, p):
+            j += 1
+        if j < nh and not _less(keys, p, hkey, j):
+            out[p] = hval[j]
+        else:
+            out[p] = 0.0

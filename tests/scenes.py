@@ -24,8 +24,9 @@ def drifting_grains(n=12, box=(0.0, 0.0, 0.024, 0.006), speed=200.0, end=4e-6, s
         ang = rng.uniform(0, np.pi)
         v = rng.uniform(-1, 1, 2) * speed
         v[0] = abs(v[0]) + speed
+        vx, vy = float(v[0]), float(v[1])
         lines.append(f"[[grains]]\ncenter = [{cx!r}, {cy!r}]\naxes = [4.0e-4, 3.0e-4]\n"
-                     f"angle = {float(ang)!r}\nmaterial = \"grain\"\nvelocity = [{float(v[0])!r}, {float(v[1])!r}]\n")
+                     f"angle = {float(ang)!r}\nmaterial = \"grain\"\nvelocity = [{vx!r}, {vy!r}]\n")
     return f"""
 [domain]
 box = [{xmin}, {ymin}, {xmax}, {ymax}]
@@ -128,3 +129,58 @@ material = "grain"
 velocity = [{-v}, 0.0]
 {extra}
 """
+
+
+def settling_bed(n=200, cols=20, r0=2.0e-4, seed=3, end=1e-4, g=-1.0e6, gamma=2.0e4, mu=0.3,
+                 level=1, out="run.h5", partition="strips", extra=""):
+    """n grains of random size and aspect on a loose lattice, falling onto the chamber floor
+    between side walls (amplified gravity, damping, friction)."""
+    rng = np.random.default_rng(seed)
+    pitch = 2.6 * r0
+    width = cols * pitch
+    rows = int(np.ceil(n / cols))
+    height = (rows + 2) * pitch
+    lines = []
+    for i in range(n):
+        cx = (i % cols + 0.5) * pitch + rng.uniform(-0.1, 0.1) * r0
+        cy = (i // cols + 0.5) * pitch
+        a = r0 * rng.uniform(0.9, 1.1)
+        b = a * rng.uniform(0.7, 1.0)
+        ang = float(rng.uniform(0, np.pi))
+        lines.append(f"[[grains]]\ncenter = [{cx!r}, {cy!r}]\naxes = [{a!r}, {b!r}]\n"
+                     f"angle = {ang!r}\nmaterial = \"grain\"\n")
+    return f"""
+[domain]
+box = [0.0, 0.0, {width!r}, {height!r}]
+partition = "{partition}"
+
+[time]
+end = {end}
+safety = 0.5
+
+[element]
+level = {level}
+
+[gravity]
+g = [0.0, {g}]
+
+[damping]
+gamma = {gamma}
+
+[contact]
+kn0 = 1.0e13
+delta_max = 2.0e-5
+friction = {mu}
+
+[walls]
+left = "frictionless"
+right = "frictionless"
+bottom = "frictional"
+friction = {mu}
+
+[output]
+path = "{out}"
+interval = {end / 4}
+{ELASTIC}
+{extra}
+""" + "\n".join(lines)

@@ -201,7 +201,7 @@ class Contact(Effect):
         self._check(sim, keys, active, res, bad)
         self._apply(sim, keys, order, active, nodes, weights, fa, pairs, welems)
         self._bookkeeping(sim, keys, order, active, us_out, res, pairs, welems)
-        self._last = (active, nodes, res)
+        self._last = {"active": active, "nodes": nodes, "res": res, "fa": fa, "keys": keys}
 
     def _check(self, sim, keys, active, res, bad):
         """Guards: a degenerate overlap, or an overlap deeper than delta_max."""
@@ -256,8 +256,8 @@ class Contact(Effect):
         """Smallest stable step of the active contacts (their stiffness hardens)."""
         if self._last is None:
             return np.inf
-        active, nodes, res = self._last
-        return contact_dt_min(active, nodes, res, sim.store.m)
+        last = self._last
+        return contact_dt_min(last["active"], last["nodes"], last["res"], sim.store.m)
 
     def energy_terms(self, sim, out):
         e = getattr(self, "energy", None)

@@ -1,0 +1,191 @@
+"""Contact through the whole solver: collision, rest, incline, and no missed contact."""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from pdfem.energy import global_terms
+from pdfem.kernels.contact import C_ACTIVE, NRES, element_pair_forces, element_wall_forces
+from pdfem.kernels.overlap import element_bboxes, pairs_from_bboxes
+from pdfem.scene import parse_scene
+from pdfem.solver import Simulation
+from tests.scenes import ELASTIC, collision, settling_bed
+
+
+def _contact(sim):
+    return [e for e in sim.effects if e.name == "contact"][0]
+
+
+def _com_velocity(sim, gid):
+    s = sim.store
+    b = int(np.nonzero(s.gid == gid)[0][0])
+    i = slice(s.nstart[b], s.nstart[b] + s.nn[b])
+    return (s.m[i, None] * s.v[i]).sum(0) / s.m[i].sum()
+
+
+def test_head_on_collision_exchanges_velocities(tmp_path):
+    v0 = 20.0
+    sim = Simulation(parse_scene(collision(v=v0, kn0=1e13, end=2e-5), str(tmp_path)),
+                     MPI.COMM_SELF)
+    s = sim.store
+    scale = s.m.sum() * v0
+    k0 = global_terms(sim)["kinetic"]
+    touched = False
+    while sim.t < sim.t_end:
+        sim.step()
+        s = sim.store
+        # Momentum to round-off at every step
+        assert np.abs((s.m[:, None] * s.v).sum(0)).max() <= 1e-12 * scale
+        n = int((_contact(sim)._last["active"] == C_ACTIVE).sum())
+        touched |= n > 0
+        if touched and n == 0:
+            break
+    assert touched and sim.t < sim.t_end
+    va, vb = _com_velocity(sim, 0), _com_velocity(sim, 1)
+    assert va[0] == pytest.approx(-v0, rel=0.02) and vb[0] == pytest.approx(v0, rel=0.02)
+    m = sim.store.m.sum() / 2
+    assert 0.5 * m * (va @ va + vb @ vb) == pytest.approx(k0, rel=0.02)
+
+
+REST = """
+[domain]
+box = [0.0, 0.0, 0.002, 0.002]
+[time]
+end = 1.0e-4
+safety = 0.5
+[element]
+level = 2
+[gravity]
+g = [0.0, -1.0e4]
+[damping]
+gamma = 3.0e5
+[contact]
+kn0 = 1.0e13
+delta_max = 2.0e-5
+[walls]
+bottom = "frictionless"
+[output]
+path = "rest.h5"
+interval = 1.0e-4
+""" + ELASTIC + """
+[[grains]]
+center = [0.001, 0.0002]
+axes = [2.5e-4, 2.0e-4]
+angle = 0.0
+material = "grain"
+"""
+
+
+def test_grain_at_rest_on_the_floor_carries_its_weight(tmp_path):
+    sim = Simulation(parse_scene(REST, str(tmp_path)), MPI.COMM_SELF)
+    weight = sim.store.m.sum() * 1.0e4
+    pe0 = global_terms(sim)["potential"]
+    # At rest: kinetic energy below 1e-6 of the potential energy drop for 10 samples running
+    calm = 0
+    while calm < 10 and sim.nstep < 100000:
+        sim.step()
+        if sim.nstep % 100 == 0:
+            terms = global_terms(sim)
+            calm = calm + 1 if abs(terms["kinetic"]) < 1e-6 * (pe0 - terms["potential"]) else 0
+    assert calm == 10
+    last = _contact(sim)._last
+    on = last["active"] == C_ACTIVE
+    assert on.any()
+    assert last["fa"][on, 1].sum() == pytest.approx(weight, rel=0.005)
+
+
+def _incline(theta, mu, g=1.0e4, end=4.0e-4):
+    gx, gy = float(g * np.sin(theta)), float(-g * np.cos(theta))
+    return f"""
+[domain]
+box = [0.0, 0.0, 0.01, 0.002]
+[time]
+end = {end}
+safety = 0.5
+[gravity]
+g = [{gx!r}, {gy!r}]
+[contact]
+kn0 = 1.0e13
+delta_max = 2.0e-5
+[walls]
+bottom = "frictional"
+friction = {mu}
+[output]
+path = "incline.h5"
+interval = {end}
+{ELASTIC}
+[[blocks]]
+name = "block"
+box = [0.001, 0.0, 0.002, 0.00025]
+nx = 4
+ny = 1
+material = "grain"
+"""
+
+
+def _block_velocity_history(sim):
+    ts, vs = [], []
+    while sim.t < sim.t_end:
+        sim.step()
+        s = sim.store
+        ts.append(sim.t)
+        vs.append((s.m * s.v[:, 0]).sum() / s.m.sum())
+    return np.array(ts), np.array(vs)
+
+
+def test_block_slides_down_incline_at_g_sin_minus_mu_cos(tmp_path):
+    theta, mu, g = np.radians(30.0), 0.2, 1.0e4
+    sim = Simulation(parse_scene(_incline(theta, mu, g), str(tmp_path)), MPI.COMM_SELF)
+    t, v = _block_velocity_history(sim)
+    late = t > 0.25 * t[-1]
+    accel = np.polyfit(t[late], v[late], 1)[0]
+    assert accel == pytest.approx(g * (np.sin(theta) - mu * np.cos(theta)), rel=0.02)
+
+
+def test_block_sticks_when_tan_theta_below_mu(tmp_path):
+    theta, mu, g = np.radians(10.0), 0.3, 1.0e4
+    sim = Simulation(parse_scene(_incline(theta, mu, g), str(tmp_path)), MPI.COMM_SELF)
+    t, v = _block_velocity_history(sim)
+    free = g * np.sin(theta) * t[-1]
+    assert np.abs(v[t > 0.25 * t[-1]]).max() < 0.01 * free
+
+
+def test_no_contact_missed_on_a_dense_bed(tmp_path):
+    # Let a bed fall and pack, then compare the contacts found with an all-pairs search
+    sim = Simulation(parse_scene(settling_bed(n=120, cols=12), str(tmp_path)), MPI.COMM_SELF)
+    for _ in range(12000):
+        sim.step()
+    s, eff = sim.store, _contact(sim)
+    found = {tuple(k) for k, a in zip(eff._last["keys"], eff._last["active"], strict=True)
+             if a == C_ACTIVE and k[2] >= 0}
+    assert len(found) > 60
+    bbox = np.empty((s.nelem, 4))
+    element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
+    out = np.zeros((200000, 2), np.int64)
+    n = pairs_from_bboxes(bbox, s.ebnd, s.elem_gid, s.elem_loc, 0, s.nelem, 0.0, out)
+    pairs = out[:n]
+    m = pairs.shape[0]
+    act = np.empty(m, np.int8)
+    res = np.empty((m, NRES))
+    element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, pairs,
+                        np.tile([1e13, 2e-5, 5e12, 0.3, 0.95], (m, 1)), np.zeros(m), act,
+                        np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty((m, 2)),
+                        np.empty(m), res)
+    brute = {(s.elem_gid[a], s.elem_loc[a], s.elem_gid[b], s.elem_loc[b])
+             for (a, b), x in zip(pairs, act, strict=True) if x == C_ACTIVE}
+    assert found == brute
+    # Walls too: every boundary element against the floor
+    cand = np.nonzero(s.ebnd.any(axis=1))[0]
+    nw = cand.shape[0]
+    wact = np.empty(nw, np.int8)
+    element_wall_forces(s.x, sim.du, s.conn, s.ebnd, cand, np.zeros((nw, 2)),
+                        np.tile([0.0, 1.0], (nw, 1)), np.tile([1e13, 2e-5, 5e12, 0.3, 0.95],
+                                                              (nw, 1)), np.zeros(nw), wact,
+                        np.empty((nw, 4), np.int64), np.empty((nw, 4)), np.empty((nw, 2)),
+                        np.empty(nw), np.empty((nw, NRES)))
+    floor = {(s.elem_gid[e], s.elem_loc[e]) for e, x in zip(cand, wact, strict=True)
+             if x == C_ACTIVE}
+    found_floor = {(k[0], k[1]) for k, a in zip(eff._last["keys"], eff._last["active"],
+                                                strict=True)
+                   if a == C_ACTIVE and k[2] == -2}
+    assert floor == found_floor and len(floor) > 0

@@ -6,7 +6,9 @@ builds only the grains it owns at the start (and all blocks), so start-up is par
 
 import numpy as np
 
+from pdfem.errors import InputError
 from pdfem.kernels import params as P
+from pdfem.kernels.cap import CAP_NST, cap_check_params
 from pdfem.kernels.integrate import NACC
 from pdfem.mesh.block import block_mesh
 from pdfem.mesh.ellipse import ellipse_mesh
@@ -31,6 +33,18 @@ def material_table(materials):
             if key in tbl:
                 table[i, col] = tbl[key]
     return table
+
+
+def check_materials(materials, table):
+    """Check model parameters the schema cannot; return the material state size per point."""
+    nst = 0
+    for i, name in enumerate(materials):
+        if int(table[i, P.MODEL]) == P.CAP:
+            why = cap_check_params(table[i])
+            if why:
+                raise InputError(f"materials.{name}: {why}")
+            nst = CAP_NST
+    return nst
 
 
 def boundary_flags(conn):

@@ -183,7 +183,7 @@ def _mixed_increment(p, sig, st, d, held, target):
             jac[:, k] = (_update(p, sig, st, dd)[0][h] - s[h]) / eps
         d[h] -= np.linalg.solve(jac, r)
     raise SimulationError(f"stress-controlled increment did not converge (residual "
-                          f"{np.abs(r).max():.3g} Pa)")
+                          f"{np.abs(r).max():.3g})")
 
 
 def run_path(p, path, nsub, held=None):

@@ -20,6 +20,7 @@ from pdfem.effects.contact import check_contact_scene
 from pdfem.errors import SimulationError
 from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
+from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.parallel.exchange import rebuild
 from pdfem.store import Batch, Store, core_fields
@@ -29,7 +30,7 @@ from pdfem.timers import Timers
 class Simulation:
     """One run of a scene on a communicator: setup, :meth:`step`, :meth:`run`."""
 
-    def __init__(self, scene, comm, nst=0, init_state=None):
+    def __init__(self, scene, comm, init_state=None):
         r = scene.resolved
         self.scene, self.comm, self.resolved = scene, comm, r
         self.timers = Timers()
@@ -40,6 +41,7 @@ class Simulation:
         damping = [e for e in self.effects if e.name == "damping"]
         self.gamma = damping[0].gamma if damping else 0.0
         self.mat_params = build.material_table(r["materials"])
+        nst = build.check_materials(r["materials"], self.mat_params)
         self.mat_ids = {name: i for i, name in enumerate(r["materials"])}
         el = r["element"]
         self.nip = 1 if el["rule"] == "1pt" else 4
@@ -96,6 +98,7 @@ class Simulation:
         build.apply_bcs(grains, [b for b in r.get("bc", []) if "wall" in b], self.box, [], [],
                         [])
         batch = Batch.concat(self.fields, [bbatch, grains])
+        material_initial_state(batch.a["mst"], batch.a["emat"], self.mat_params)
         store = Store(self.fields, batch, batch.nbody)
         q4_lumped_mass(store.x, store.conn, store.emat, self.mat_params, 0, store.ne_own,
                        store.m)

@@ -12,7 +12,7 @@ import sys
 
 from pdfem.errors import InputError, SimulationError
 
-COMMANDS = ("run",)
+COMMANDS = ("run", "material", "bench")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -45,6 +45,6 @@ def run(args):
     check_output_path(out, args.force)
     if comm.rank == 0 and not args.quiet:
         print(f"pdfem: {scene.path} on {comm.size} rank(s) -> {out}", flush=True)
-    sim = Simulation(scene, comm, nst=0)
+    sim = Simulation(scene, comm)
     drive(sim, out, quiet=args.quiet)
     return 0

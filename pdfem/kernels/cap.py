@@ -10,7 +10,8 @@ the deviator keeps the direction of the trial deviator s_t):
     cap (trial I1 < L):       nested scalar solves; outer Newton/bisection on kappa so that
                               H(kappa) - H(kappa_n) = eps_v^p increment (consistent hardening),
                               inner closest point on the ellipse of that kappa
-    envelope (I1 >= L):       scalar Newton on I1 (perfectly plastic, F(I1) convex)
+    envelope (I1 >= L):       scalar Newton on I1 (perfectly plastic; F concave, so the
+                              elastic domain J <= F(I1) is convex)
     envelope/cap corner:      when the envelope return would land at I1 < L(kappa): stress at
                               I1 = L, J = F(L), both multipliers >= 0
     tension cut-off I1 <= T:  I1 = T with s unchanged, or the T/envelope corner (I1 = T,
@@ -19,12 +20,20 @@ Every mode has eps_v^p increment = (I1_trial - I1)/(3K).
 
 Dilatancy (flow on the envelope or the cut-off) retracts the cap through the same hardening
 law, but kappa never rises above max(kappa_n, 0) (Sandler-Rubin: L = min(kappa, 0), the cap
-stops retracting when L reaches the origin; McCormick table rows at +0.012) nor past the
-current stress I1 (so the envelope point stays on the envelope side of the corner).
-Dilatancy beyond those limits is kept in eps_v^p (st[1]) but not in kappa.
+stops retracting when L reaches the origin, as the McCormick table shows from eps = +0.012)
+nor past the current stress I1 (so an envelope point stays on the envelope side of the
+corner; without this limit the softening cap can overtake the stress and the backward-Euler
+system has no solution). Dilatancy beyond those limits is kept in eps_v^p (st[1]) but not in
+kappa; later compaction hardens kappa incrementally from where it stands.
 
-Accuracy: the increment is split into substeps, their number growing with the normalised
-overshoot of the trial stress, so results hardly depend on the increment size.
+kappa > 0 (only an initial state: kappa0 > 0 puts X0 near 0): the 1979 geometry then has a
+step at I1 = 0 between the cap top -X/R and the envelope F(0), i.e. a non-convex elastic
+domain. The trial I1 picks the side (cap_side); the corner there is (0, F(0)).
+
+Accuracy: the increment is split into 1 + int(overshoot/SUB_ETA) equal substeps (overshoot =
+normalised yield value of the trial, at most NSUB_MAX), so results hardly depend on the
+increment size: one increment vs ten differ by < 0.5 % of max(A, |sigma|) in the tests
+(kappa <= 0), by up to 4 % for paths crossing the kappa > 0 step.
 
 State row st (CAP_NST = 6): kappa, eps_v^p, eps^p (xx, yy, xy, zz).
 Status: 0 ok, 1 a local solve did not converge, 2 stress left outside the surface by more
@@ -37,13 +46,15 @@ from numba import njit
 
 from pdfem.kernels.cap_surface import (
     cap_l,
+    cap_return,
     cap_rho,
     cap_side,
     cap_x,
+    corner_kappa,
+    dilate_kappa,
     env_f,
     env_slope,
-    hard_dh,
-    hard_h,
+    envelope_i1,
     tension_limit,
     x0,
     yield_value,
@@ -71,7 +82,6 @@ CAP_NONFINITE = 3
 TOL_DEFAULT = 1e-8  # yield tolerance when p[CAP_TOL] is 0
 SUB_ETA = 0.01  # target normalised trial overshoot per substep
 NSUB_MAX = 2000  # substep cap
-MAXIT = 200  # iterations of every local scalar solve
 
 
 @njit(cache=True)
@@ -101,188 +111,6 @@ def cap_yield_value(p, sig, st):
 
 
 @njit(cache=True)
-def _envelope_i1(p, i1t, jt, kb, gs):
-    """I1 of the backward-Euler return onto the envelope; returns (I1, converged).
-
-    Root of r(I1) = I1 - I1t + (9K/G) (-F'(I1)) (Jt - F(I1)), increasing and convex on the
-    bracket [max(I1t - r(I1t), F^-1(Jt)), I1t], so Newton from the right converges.
-    """
-    q = 9.0 * kb / gs
-    sl = env_slope(p, i1t)
-    over = q * sl * (jt - env_f(p, i1t))
-    if over <= 0.0:
-        return i1t, True
-    # Bracket
-    hi = i1t
-    lo = i1t - over
-    a, b, c = p[CAP_A], p[CAP_B], p[CAP_C]
-    if jt < a and c > 0.0 and b > 0.0:
-        lo = max(lo, math.log((a - jt) / c) / b)
-    # Safeguarded Newton from the right end
-    x = hi
-    rtol = 1e-14 * (abs(i1t) + 3.0 * a)
-    for _ in range(MAXIT):
-        sl = env_slope(p, x)
-        fj = jt - env_f(p, x)
-        r = x - i1t + q * sl * fj
-        if abs(r) <= rtol:
-            return x, True
-        if r > 0.0:
-            hi = x
-        else:
-            lo = x
-        xn = x - r / (1.0 + q * (b * sl * fj + sl * sl))
-        if not (lo <= xn <= hi):
-            xn = 0.5 * (lo + hi)
-        if abs(xn - x) <= 1e-15 * (abs(x) + a):
-            return xn, True
-        x = xn
-    return x, False
-
-
-@njit(cache=True)
-def _dilate(p, kap, depv, lim, xa):
-    """Kappa after a dilatant eps_v^p increment depv >= 0, at most lim (>= kap)."""
-    if depv <= 0.0 or lim <= kap:
-        return kap
-    ht = hard_h(p, kap, xa) + depv
-    if hard_h(p, lim, xa) <= ht:
-        return lim
-    # H is increasing: safeguarded Newton on [kap, lim]
-    lo = kap
-    hi = lim
-    k = kap
-    for _ in range(MAXIT):
-        r = hard_h(p, k, xa) - ht
-        if r > 0.0:
-            hi = k
-        else:
-            lo = k
-        kn = k - r / hard_dh(p, k, xa)
-        if not (lo <= kn <= hi):
-            kn = 0.5 * (lo + hi)
-        if abs(kn - k) <= 1e-15 * (abs(k) + p[CAP_R] * p[CAP_A]):
-            return kn
-        k = kn
-    return k
-
-
-@njit(cache=True)
-def _corner_kappa(p, i1t, kap, xa, kb):
-    """Kappa at the envelope/cap corner: H(k) - H(kap) = (I1t - L(k))/(3K), k <= max(kap, 0)."""
-    if kap >= 0.0:
-        return kap, True
-    h0 = hard_h(p, kap, xa)
-    if hard_h(p, 0.0, xa) - h0 - i1t / (3.0 * kb) <= 0.0:
-        return 0.0, True
-    # phi is increasing on [kap, 0]: safeguarded Newton
-    lo = kap
-    hi = 0.0
-    k = kap
-    for _ in range(MAXIT):
-        r = hard_h(p, k, xa) - h0 - (i1t - k) / (3.0 * kb)
-        if r > 0.0:
-            hi = k
-        else:
-            lo = k
-        kn = k - r / (hard_dh(p, k, xa) + 1.0 / (3.0 * kb))
-        if not (lo <= kn <= hi):
-            kn = 0.5 * (lo + hi)
-        if abs(kn - k) <= 1e-15 * (abs(k) + p[CAP_R] * p[CAP_A]):
-            return kn, True
-        k = kn
-    return k, False
-
-
-@njit(cache=True)
-def _cap_point(p, i1t, jt, kap, kb, gs):
-    """Backward-Euler return onto the cap of fixed position kap; returns (I1, J, dI1/dkappa).
-
-    With s = 1/(1 + 9K dlam/rho): I1 - L = (I1t - L) s, J = Jt s/(c + (1 - c) s), c = G R^2/9K,
-    and s solves s sqrt((R Jt/(c + (1 - c) s))^2 + (I1t - L)^2) = rho (increasing in s).
-    """
-    r = p[CAP_R]
-    el = cap_l(kap)
-    dl = 1.0 if kap < 0.0 else 0.0
-    rho = cap_rho(p, kap)
-    a = i1t - el
-    c = gs * r * r / (9.0 * kb)
-    rj = r * jt
-    # Inside (s = 1), degenerate cap (s = 0), or safeguarded Newton on [0, 1]
-    mm = math.sqrt(rj * rj + a * a)
-    if mm <= rho:
-        return i1t, jt, 0.0
-    s = 0.0
-    if rho > 0.0:
-        s = rho / mm
-        lo = 0.0
-        hi = 1.0
-        gtol = 1e-15 * (mm + rho)
-        for _ in range(MAXIT):
-            w = c + (1.0 - c) * s
-            mm = math.sqrt((rj / w) ** 2 + a * a)
-            g = s * mm - rho
-            if abs(g) <= gtol:
-                break
-            if g > 0.0:
-                hi = s
-            else:
-                lo = s
-            dm = -(rj * rj) * (1.0 - c) / (mm * w * w * w)
-            sn = s - g / (mm + s * dm)
-            if not (lo < sn < hi):
-                sn = 0.5 * (lo + hi)
-            if hi - lo <= 1e-16:
-                s = sn
-                break
-            s = sn
-    w = c + (1.0 - c) * s
-    mm = math.sqrt((rj / w) ** 2 + a * a)
-    dm = -(rj * rj) * (1.0 - c) / (mm * w * w * w)
-    # Sensitivity of the return point to the cap position
-    drho = dl - 1.0 - r * env_slope(p, kap)
-    if rho <= 0.0:
-        drho = max(drho, 0.0)
-    dgdk = -s * a * dl / mm - drho
-    dsdk = -dgdk / (mm + s * dm)
-    return el + a * s, jt * s / w, dl * (1.0 - s) + a * dsdk
-
-
-@njit(cache=True)
-def _cap_return(p, i1t, jt, kap, xa, kb, gs):
-    """Cap return with consistent hardening; returns (I1, J, kappa, converged).
-
-    Root in (I1t, kap) of h(k) = H(k) - H(kap) + (I1(k) - I1t)/(3K): h(kap) > 0 and
-    h -> H(I1t) - H(kap) < 0 as k -> I1t (the cap then passes just above the trial I1).
-    """
-    h0 = hard_h(p, kap, xa)
-    lo = i1t
-    hi = kap
-    k = kap
-    htol = max(1e-13 * (cap_l(kap) - i1t) / (3.0 * kb), 4e-16 * (h0 + p[CAP_W]))
-    ktol = 1e-15 * (abs(kap) + abs(i1t) + p[CAP_R] * p[CAP_A])
-    for _ in range(MAXIT):
-        i1, j, di1 = _cap_point(p, i1t, jt, k, kb, gs)
-        h = hard_h(p, k, xa) - h0 + (i1 - i1t) / (3.0 * kb)
-        if abs(h) <= htol:
-            return i1, j, k, True
-        if h > 0.0:
-            hi = k
-        else:
-            lo = k
-        dh = hard_dh(p, k, xa) + di1 / (3.0 * kb)
-        kn = k - h / dh if dh > 0.0 else 0.5 * (lo + hi)
-        if not (lo < kn < hi):
-            kn = 0.5 * (lo + hi)
-        if abs(kn - k) <= ktol:
-            i1, j, di1 = _cap_point(p, i1t, jt, kn, kb, gs)
-            return i1, j, kn, True
-        k = kn
-    i1, j, di1 = _cap_point(p, i1t, jt, k, kb, gs)
-    return i1, j, k, False
-
-
-@njit(cache=True)
 def _trial(p, sig, d0, d1, d2, d3):
     """Elastic trial stress sig + C:d as four scalars (same arithmetic as elastic_update)."""
     g2 = 2.0 * p[SHEAR]
@@ -303,7 +131,7 @@ def _return_invariants(p, i1t, jt, kap, xa, tn):
         r = p[CAP_R]
         if math.sqrt(r * r * jt * jt + (i1t - el) ** 2) <= cap_rho(p, kap):
             return i1t, jt, kap, True, False
-        i1, j, kn, ok = _cap_return(p, i1t, jt, kap, xa, kb, gs)
+        i1, j, kn, ok = cap_return(p, i1t, jt, kap, xa, kb, gs)
         return i1, j, kn, ok, True
     # Envelope side: elastic, tension cut-off, tension corner or envelope
     if i1t <= tn and jt <= env_f(p, i1t):
@@ -322,15 +150,15 @@ def _return_invariants(p, i1t, jt, kap, xa, tn):
             envelope = False
     ok = True
     if envelope:
-        i1, ok = _envelope_i1(p, i1t, jt, kb, gs)
+        i1, ok = envelope_i1(p, i1t, jt, kb, gs)
         j = max(env_f(p, i1), 0.0)
         # Past the corner: stress at I1 = L(kappa), J = F(L)
         if i1 < el:
-            kn, ok = _corner_kappa(p, i1t, kap, xa, kb)
+            kn, ok = corner_kappa(p, i1t, kap, xa, kb)
             i1 = cap_l(kn)
             return i1, env_f(p, i1), kn, ok, True
     # Dilatancy retracts the cap, never past the origin or the stress
-    kn = _dilate(p, kap, (i1t - i1) / (3.0 * kb), max(kap, min(0.0, i1)), xa)
+    kn = dilate_kappa(p, kap, (i1t - i1) / (3.0 * kb), max(kap, min(0.0, i1)), xa)
     return i1, j, kn, ok, True
 
 
@@ -379,30 +207,8 @@ def _step(p, sig, st, d0, d1, d2, d3, xa, tn):
 
 
 @njit(cache=True)
-def cap_update(p, sig, deps, st):
-    """Cap model update of stress sig (4,) in place for strain increment deps (4,).
-
-    p: parameter row (params.py columns BULK, SHEAR, CAP_A .. CAP_TOL); st: state row of
-    length CAP_NST (see cap_initial_state). Returns (status, dwp) with dwp = sigma:deps^p >= 0
-    the plastic work density increment. On a nonzero status the state is left as computed.
-    """
-    d0, d1, d2, d3 = deps[0], deps[1], deps[2], deps[3]
-    if not (math.isfinite(d0 + d1 + d2 + d3) and math.isfinite(sig[0] + sig[1] + sig[2]
-                                                                + sig[3] + st[0])):
-        return CAP_NONFINITE, 0.0
-    tol = cap_tolerance(p)
-    # Elastic trial: done when it is inside
-    t0, t1, t2, t3 = _trial(p, sig, d0, d1, d2, d3)
-    i1t = t0 + t1 + t3
-    m = i1t / 3.0
-    jt = math.sqrt(0.5 * ((t0 - m) ** 2 + (t1 - m) ** 2 + (t3 - m) ** 2) + t2 * t2)
-    over = yield_value(p, i1t, jt, st[0])
-    if over <= 0.0:
-        sig[0] = t0
-        sig[1] = t1
-        sig[2] = t2
-        sig[3] = t3
-        return CAP_OK, 0.0
+def _plastic_update(p, sig, st, d0, d1, d2, d3, over):
+    """Substepped plastic update of cap_update for a trial with normalised overshoot over."""
     # Substeps: more of them the further the trial lies outside
     nsub = min(NSUB_MAX, 1 + int(over / SUB_ETA))
     xa = x0(p)
@@ -418,9 +224,36 @@ def cap_update(p, sig, deps, st):
     # Guards: finite, on or inside the surface
     if not math.isfinite(sig[0] + sig[1] + sig[2] + sig[3] + st[0] + dwp):
         return CAP_NONFINITE, dwp
-    if status == CAP_OK and cap_yield_value(p, sig, st) > tol:
+    if status == CAP_OK and cap_yield_value(p, sig, st) > cap_tolerance(p):
         status = CAP_OUTSIDE
     return status, dwp
+
+
+@njit(cache=True)
+def cap_update(p, sig, deps, st):
+    """Cap model update of stress sig (4,) in place for strain increment deps (4,).
+
+    p: parameter row (params.py columns BULK, SHEAR, CAP_A .. CAP_TOL); st: state row of
+    length CAP_NST (see cap_initial_state). Returns (status, dwp) with dwp = sigma:deps^p >= 0
+    the plastic work density increment. On a nonzero status the state is left as computed.
+    """
+    d0, d1, d2, d3 = deps[0], deps[1], deps[2], deps[3]
+    if not (math.isfinite(d0 + d1 + d2 + d3) and math.isfinite(sig[0] + sig[1] + sig[2]
+                                                                + sig[3] + st[0])):
+        return CAP_NONFINITE, 0.0
+    # Elastic trial: done when it is inside
+    t0, t1, t2, t3 = _trial(p, sig, d0, d1, d2, d3)
+    i1t = t0 + t1 + t3
+    m = i1t / 3.0
+    jt = math.sqrt(0.5 * ((t0 - m) ** 2 + (t1 - m) ** 2 + (t3 - m) ** 2) + t2 * t2)
+    over = yield_value(p, i1t, jt, st[0])
+    if over <= 0.0:
+        sig[0] = t0
+        sig[1] = t1
+        sig[2] = t2
+        sig[3] = t3
+        return CAP_OK, 0.0
+    return _plastic_update(p, sig, st, d0, d1, d2, d3, over)
 
 
 def cap_check_params(p):

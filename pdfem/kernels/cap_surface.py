@@ -1,4 +1,4 @@
-"""Sandler-Rubin cap model: surfaces, hardening law and invariants (helpers of cap.py).
+"""Sandler-Rubin cap model: surfaces, hardening law and the scalar return solves (for cap.py).
 
 Sign convention: tension positive, compression negative. I1 = tr(sigma) with sigma_zz
 included; J = sqrt(J2) with J2 = s:s/2 of the full 3-D deviator (xx, yy, zz, xy; xy counted
@@ -19,6 +19,9 @@ McCormick Ranch table needs at its second row.
 
 Hardening (relative to the initial cap X0 = X(kappa0), Albany form):
     eps_v^p = W (exp(D (X - X0)) - 1) = H(k) - W,   H(k) = W exp(D (X(k) - X0)).
+
+The solves below work in invariant space (I1, J) with bulk modulus kb = K and shear modulus
+gs = G; each is a safeguarded Newton iteration inside a bracket that holds the root.
 """
 
 import math
@@ -26,6 +29,8 @@ import math
 from numba import njit
 
 from pdfem.kernels.params import CAP_A, CAP_B, CAP_C, CAP_D, CAP_KAPPA0, CAP_R, CAP_T, CAP_W
+
+MAXIT = 200  # iterations of every local scalar solve
 
 
 @njit(cache=True)
@@ -103,19 +108,6 @@ def hard_dh(p, kap, xa):
 
 
 @njit(cache=True)
-def invariants(sig, dev):
-    """Return (I1, J = sqrt(J2)) of sig (4,); dev (4,) receives the deviator."""
-    i1 = sig[0] + sig[1] + sig[3]
-    m = i1 / 3.0
-    dev[0] = sig[0] - m
-    dev[1] = sig[1] - m
-    dev[2] = sig[2]
-    dev[3] = sig[3] - m
-    j2 = 0.5 * (dev[0] * dev[0] + dev[1] * dev[1] + dev[3] * dev[3]) + dev[2] * dev[2]
-    return i1, math.sqrt(j2)
-
-
-@njit(cache=True)
 def yield_value(p, i1, j, kap):
     """Normalised yield value at (I1, J) for cap position kappa: > 0 means outside.
 
@@ -130,5 +122,187 @@ def yield_value(p, i1, j, kap):
         v = (math.sqrt(r * r * j * j + (i1 - el) ** 2) - cap_rho(p, kap)) / (r * a)
     else:
         v = (j - env_f(p, i1)) / a
-    # Tension cut-off
-    return max(v, (i1 - tension_limit(p)) / (3.0 * a))
+    # Tension cut-off (T <= apex is checked by cap_check_params; returns use min(T, apex))
+    return max(v, (i1 - p[CAP_T]) / (3.0 * a))
+
+
+@njit(cache=True)
+def envelope_i1(p, i1t, jt, kb, gs):
+    """I1 of the backward-Euler return onto the envelope; returns (I1, converged).
+
+    Root of r(I1) = I1 - I1t + (9K/G) (-F'(I1)) (Jt - F(I1)), increasing and convex on the
+    bracket [max(I1t - r(I1t), F^-1(Jt)), I1t], so Newton from the right converges.
+    """
+    q = 9.0 * kb / gs
+    sl = env_slope(p, i1t)
+    over = q * sl * (jt - env_f(p, i1t))
+    if over <= 0.0:
+        return i1t, True
+    # Bracket
+    hi = i1t
+    lo = i1t - over
+    a, b, c = p[CAP_A], p[CAP_B], p[CAP_C]
+    if jt < a and c > 0.0 and b > 0.0:
+        lo = max(lo, math.log((a - jt) / c) / b)
+    # Safeguarded Newton from the right end
+    x = hi
+    rtol = 1e-14 * (abs(i1t) + 3.0 * a)
+    for _ in range(MAXIT):
+        sl = env_slope(p, x)
+        fj = jt - env_f(p, x)
+        r = x - i1t + q * sl * fj
+        if abs(r) <= rtol:
+            return x, True
+        if r > 0.0:
+            hi = x
+        else:
+            lo = x
+        xn = x - r / (1.0 + q * (b * sl * fj + sl * sl))
+        if not (lo <= xn <= hi):
+            xn = 0.5 * (lo + hi)
+        if abs(xn - x) <= 1e-15 * (abs(x) + a):
+            return xn, True
+        x = xn
+    return x, False
+
+
+@njit(cache=True)
+def dilate_kappa(p, kap, depv, lim, xa):
+    """Kappa after a dilatant eps_v^p increment depv >= 0, at most lim (>= kap)."""
+    if depv <= 0.0 or lim <= kap:
+        return kap
+    ht = hard_h(p, kap, xa) + depv
+    if hard_h(p, lim, xa) <= ht:
+        return lim
+    # H is increasing: safeguarded Newton on [kap, lim]
+    lo = kap
+    hi = lim
+    k = kap
+    for _ in range(MAXIT):
+        r = hard_h(p, k, xa) - ht
+        if r > 0.0:
+            hi = k
+        else:
+            lo = k
+        kn = k - r / hard_dh(p, k, xa)
+        if not (lo <= kn <= hi):
+            kn = 0.5 * (lo + hi)
+        if abs(kn - k) <= 1e-15 * (abs(k) + p[CAP_R] * p[CAP_A]):
+            return kn
+        k = kn
+    return k
+
+
+@njit(cache=True)
+def corner_kappa(p, i1t, kap, xa, kb):
+    """Kappa at the envelope/cap corner: H(k) - H(kap) = (I1t - L(k))/(3K), k <= max(kap, 0)."""
+    if kap >= 0.0:
+        return kap, True
+    h0 = hard_h(p, kap, xa)
+    if hard_h(p, 0.0, xa) - h0 - i1t / (3.0 * kb) <= 0.0:
+        return 0.0, True
+    # phi is increasing on [kap, 0]: safeguarded Newton
+    lo = kap
+    hi = 0.0
+    k = kap
+    for _ in range(MAXIT):
+        r = hard_h(p, k, xa) - h0 - (i1t - k) / (3.0 * kb)
+        if r > 0.0:
+            hi = k
+        else:
+            lo = k
+        kn = k - r / (hard_dh(p, k, xa) + 1.0 / (3.0 * kb))
+        if not (lo <= kn <= hi):
+            kn = 0.5 * (lo + hi)
+        if abs(kn - k) <= 1e-15 * (abs(k) + p[CAP_R] * p[CAP_A]):
+            return kn, True
+        k = kn
+    return k, False
+
+
+@njit(cache=True)
+def cap_point(p, i1t, jt, kap, kb, gs):
+    """Backward-Euler return onto the cap of fixed position kap; returns (I1, J, dI1/dkappa).
+
+    With s = 1/(1 + 9K dlam/rho): I1 - L = (I1t - L) s, J = Jt s/(c + (1 - c) s), c = G R^2/9K,
+    and s solves s sqrt((R Jt/(c + (1 - c) s))^2 + (I1t - L)^2) = rho (increasing in s).
+    """
+    r = p[CAP_R]
+    el = cap_l(kap)
+    dl = 1.0 if kap < 0.0 else 0.0
+    rho = cap_rho(p, kap)
+    a = i1t - el
+    c = gs * r * r / (9.0 * kb)
+    rj = r * jt
+    # Inside (s = 1), degenerate cap (s = 0), or safeguarded Newton on [0, 1]
+    mm = math.sqrt(rj * rj + a * a)
+    if mm <= rho:
+        return i1t, jt, 0.0
+    s = 0.0
+    if rho > 0.0:
+        s = rho / mm
+        lo = 0.0
+        hi = 1.0
+        gtol = 1e-15 * (mm + rho)
+        for _ in range(MAXIT):
+            w = c + (1.0 - c) * s
+            mm = math.sqrt((rj / w) ** 2 + a * a)
+            g = s * mm - rho
+            if abs(g) <= gtol:
+                break
+            if g > 0.0:
+                hi = s
+            else:
+                lo = s
+            dm = -(rj * rj) * (1.0 - c) / (mm * w * w * w)
+            sn = s - g / (mm + s * dm)
+            if not (lo < sn < hi):
+                sn = 0.5 * (lo + hi)
+            if hi - lo <= 1e-16:
+                s = sn
+                break
+            s = sn
+    w = c + (1.0 - c) * s
+    mm = math.sqrt((rj / w) ** 2 + a * a)
+    dm = -(rj * rj) * (1.0 - c) / (mm * w * w * w)
+    # Sensitivity of the return point to the cap position
+    drho = dl - 1.0 - r * env_slope(p, kap)
+    if rho <= 0.0:
+        drho = max(drho, 0.0)
+    dgdk = -s * a * dl / mm - drho
+    dsdk = -dgdk / (mm + s * dm)
+    return el + a * s, jt * s / w, dl * (1.0 - s) + a * dsdk
+
+
+@njit(cache=True)
+def cap_return(p, i1t, jt, kap, xa, kb, gs):
+    """Cap return with consistent hardening; returns (I1, J, kappa, converged).
+
+    Root in (I1t, kap) of h(k) = H(k) - H(kap) + (I1(k) - I1t)/(3K): h(kap) > 0 and
+    h -> H(I1t) - H(kap) < 0 as k -> I1t (the cap then passes just above the trial I1).
+    """
+    h0 = hard_h(p, kap, xa)
+    lo = i1t
+    hi = kap
+    k = kap
+    htol = max(1e-13 * (cap_l(kap) - i1t) / (3.0 * kb), 4e-16 * (h0 + p[CAP_W]))
+    ktol = 1e-15 * (abs(kap) + abs(i1t) + p[CAP_R] * p[CAP_A])
+    for _ in range(MAXIT):
+        i1, j, di1 = cap_point(p, i1t, jt, k, kb, gs)
+        h = hard_h(p, k, xa) - h0 + (i1 - i1t) / (3.0 * kb)
+        if abs(h) <= htol:
+            return i1, j, k, True
+        if h > 0.0:
+            hi = k
+        else:
+            lo = k
+        dh = hard_dh(p, k, xa) + di1 / (3.0 * kb)
+        kn = k - h / dh if dh > 0.0 else 0.5 * (lo + hi)
+        if not (lo < kn < hi):
+            kn = 0.5 * (lo + hi)
+        if abs(kn - k) <= ktol:
+            i1, j, di1 = cap_point(p, i1t, jt, kn, kb, gs)
+            return i1, j, kn, True
+        k = kn
+    i1, j, di1 = cap_point(p, i1t, jt, k, kb, gs)
+    return i1, j, k, False

@@ -2,13 +2,15 @@
 
 Status codes returned by ``material_update``:
     0   success
-    -1  unknown or not-yet-wired model id (the element kernels then report the element)
+    -1  unknown model id (the element kernels then report the element)
+    > 0 the cap return failed (pdfem.kernels.cap status codes)
 """
 
 from numba import njit
 
+from pdfem.kernels.cap import cap_initial_state, cap_update
 from pdfem.kernels.elastic import elastic_update
-from pdfem.kernels.params import ELASTIC, MODEL
+from pdfem.kernels.params import CAP, ELASTIC, MODEL
 
 MAT_OK = 0
 MAT_UNKNOWN_MODEL = -1
@@ -26,5 +28,19 @@ def material_update(p, sig, deps, st):
     # Isotropic hypo-elasticity
     if model == ELASTIC:
         return MAT_OK, elastic_update(p, sig, deps, st)
-    # CAP: lead wires `if model == CAP: return MAT_OK, cap_update(p, sig, deps, st)` here
+    # Sandler-Rubin cap plasticity (state row of CAP_NST values)
+    if model == CAP:
+        return cap_update(p, sig, deps, st)
     return MAT_UNKNOWN_MODEL, 0.0
+
+
+@njit(cache=True)
+def material_initial_state(mst, emat, mat_params):
+    """Initial internal state of every integration point of every element (cap: kappa_0)."""
+    if mst.shape[2] == 0:
+        return
+    for e in range(mst.shape[0]):
+        p = mat_params[emat[e]]
+        if int(p[MODEL]) == CAP:
+            for q in range(mst.shape[1]):
+                cap_initial_state(p, mst[e, q])

@@ -8,6 +8,7 @@ effects register) of ghosts are refreshed, from owner to ghost, every step.
 """
 
 import numpy as np
+from mpi4py import MPI
 from numba import njit
 
 from pdfem.parallel.mpi import alltoallv
@@ -76,15 +77,15 @@ class Halo:
         """Copy owner values of the given node arrays into the ghosts (x, v, ...)."""
         comm = self.comm
         reqs, rbufs = [], {}
-        for r, (n0, cnt) in self.recv.items():
-            width = sum(int(np.prod(a.shape[1:])) for a in arrays)
+        width = sum(int(np.prod(a.shape[1:])) for a in arrays)
+        for r, (_, cnt) in self.recv.items():
             rbufs[r] = np.empty(cnt * width, np.float64)
             reqs.append(comm.Irecv(rbufs[r], source=r, tag=7))
+        sbufs = []
         for r, idx in self.send.items():
             buf = np.concatenate([a[idx].reshape(idx.shape[0], -1) for a in arrays], axis=1)
-            reqs.append(comm.Isend(np.ascontiguousarray(buf).ravel(), dest=r, tag=7))
-        from mpi4py import MPI
-
+            sbufs.append(np.ascontiguousarray(buf).ravel())
+            reqs.append(comm.Isend(sbufs[-1], dest=r, tag=7))
         MPI.Request.Waitall(reqs)
         for r, (n0, cnt) in self.recv.items():
             buf = rbufs[r].reshape(cnt, -1)
@@ -145,7 +146,7 @@ def rebuild(comm, store, grid, owner, nglobal):
     new = Store(fields, Batch.concat(fields, [glob, sorted_owned] + ghosts), base.nb_own)
     send = {r: ranges(new.nstart[bs], new.nn[bs]) for r, bs in send_bodies.items()}
     recv, n0 = {}, new.nn_own
-    for r, g in zip(sources, ghosts):
+    for r, g in zip(sources, ghosts, strict=True):
         cnt = int(g.a["nn"].sum())
         recv[r] = (n0, cnt)
         n0 += cnt

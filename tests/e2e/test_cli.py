@@ -105,3 +105,24 @@ def test_missing_scene_file_and_existing_output(tmp_path):
     p = pdfem(["run", "s.toml", "--quiet", "--force"], tmp_path)
     assert p.returncode == 0, p.stderr
     assert h5py.is_hdf5(tmp_path / "keep.h5")
+
+
+def test_settling_bed_bit_identical_after_20000_steps(tmp_path):
+    from tests.scenes import settling_bed
+
+    text = settling_bed(n=200, end=1.0, partition="rcb").replace(
+        "safety = 0.5", "safety = 0.5\nmax_steps = 20000")
+    text = text.replace("interval = 0.25", "interval = 5.0e-5")
+    (tmp_path / "bed.toml").write_text(text)
+    ref = None
+    for n in (1, 2, 3, 4):
+        p = pdfem(["run", "bed.toml", "-o", f"b{n}.h5", "--quiet"], tmp_path, ranks=n,
+                  timeout=600)
+        assert p.returncode == 0, p.stderr
+        d = datasets(tmp_path / f"b{n}.h5")
+        if ref is None:
+            ref = d
+            assert d["energy/contact"][-1] > 0 and len(d["frames/time"]) >= 4
+            continue
+        for k in ref:
+            assert np.array_equal(ref[k], d[k]), f"{k} differs on {n} ranks"

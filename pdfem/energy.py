@@ -4,7 +4,12 @@ Each rank evaluates every term per owned body (global bodies on rank 0 only); ra
 gathers the rows and sums each column with math.fsum, whose correctly rounded result does
 not depend on the order of the rows. Balance:
     E = K + U_strain + U_contact + V_gravity + D_damping + D_plastic + D_friction - W_bc
-stays equal to its initial value; the error is |E - E0| over the largest term.
+        + (E_thermal - Q_sources - Q_bc) + W_thermal_strain
+stays equal to its initial value; the error is |E - E0| over the largest term. With [heat],
+E_thermal = sum C (T - T_initial) grows by what the sources (dissipation, friction, thermo-
+elastic coupling) and the held nodes put in, so the bracket checks that the heat update
+conserves energy while the dissipated terms stay counted once; W_thermal_strain is the work
+of the stress on the thermal strain (thermal expansion). Without [heat] they are zero.
 """
 
 import math
@@ -16,8 +21,8 @@ from pdfem.kernels.integrate import ACC_BC, ACC_DAMP, ACC_FRIC, body_sums
 from pdfem.parallel.mpi import gather_rows
 
 TERMS = ("kinetic", "strain", "contact", "potential", "damping", "plastic", "friction",
-         "bc_work")
-SIGN = {"bc_work": -1.0}
+         "bc_work", "thermal", "heat_sources", "heat_bc", "thermal_work")
+SIGN = {"bc_work": -1.0, "heat_sources": -1.0, "heat_bc": -1.0}
 
 
 def body_terms(sim):

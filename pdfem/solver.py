@@ -2,11 +2,12 @@
 
 1. positions to t+dt (eq. 72)
 2. neighbourhood: rebuild (migrate + ghosts) when a node moved more than half the skin,
-   otherwise refresh the ghosts' positions and velocities
-3. internal forces of owned elements (strain increment -> material -> stress -> forces)
-4. contact forces on owned nodes (effect hook)
+   otherwise refresh the ghosts' positions and velocities (and temperatures)
+3. internal forces of owned elements (strain increment -> material -> stress -> forces);
+   effects with element temperatures prepare them first (before_elements)
+4. contact forces on owned nodes (effect hook; contact heat with it)
 5. body forces (effect hooks); boundary conditions and damping enter step 7
-6. heat (effect hook)
+6. heat: sources onto the nodes, temperatures to t+dt (effect hook)
 7. next dt (global min), velocities to the next half step (eq. 68), diagnostics, output
 """
 
@@ -25,6 +26,9 @@ from pdfem.kernels.stable import q4_stable_dt
 from pdfem.parallel.exchange import rebuild
 from pdfem.store import Batch, Store, core_fields
 from pdfem.timers import Timers
+
+# Element temperatures of a run without thermo-mechanical coupling (the kernels skip them)
+NO_ETH = np.zeros((0, 3))
 
 
 class Simulation:
@@ -49,7 +53,7 @@ class Simulation:
         self.hg_coef = float(el["hourglass"]) if el["rule"] == "1pt" else 0.0
         self.fields = core_fields(self.nip, nst, NACC)
         for eff in self.effects:
-            self.fields += list(eff.extra_fields)
+            self.fields += [f for f in eff.extra_fields if f not in self.fields]
         self.halo_fields = ["x", "v"] + [n for e in self.effects for n in e.halo_fields]
         dom, tm = r["domain"], r["time"]
         self.box = tuple(dom["box"])
@@ -91,6 +95,7 @@ class Simulation:
         blocks = r.get("blocks", [])
         bbatch, bsets = build.block_batch(self.fields, self.nip, self.fields_nst(), blocks, ng,
                                           self.mat_ids)
+        self.block_names, self.block_sets = [b["name"] for b in blocks], bsets
         self.nglobal = len(blocks)
         first = np.concatenate(([0], np.cumsum(bbatch.a["nn"])[:-1])).astype(np.int64)
         build.apply_bcs(bbatch, r.get("bc", []), self.box, [b["name"] for b in blocks], bsets,
@@ -122,8 +127,11 @@ class Simulation:
             self.nstep += 1
         # 2. neighbourhood: rebuild or halo refresh
         self.neighbourhood()
-        # 3-6. internal, contact, body forces and heat
+        # 3-5. internal, contact and body forces
         self.compute_forces()
+        # 6. heat
+        for eff in self.effects:
+            eff.heat(self)
         # 7. next dt, velocities, diagnostics
         self.dt_prev = self.dt
         self.dt = self.next_dt()
@@ -143,7 +151,7 @@ class Simulation:
             self.f = np.zeros_like(s.v)
             self.kin = np.zeros(s.nbody)
             for eff in self.effects:
-                eff.after_rebuild(self) if hasattr(eff, "after_rebuild") else None
+                eff.after_rebuild(self)
         else:
             with self.timers.phase("halo"):
                 self.halo.refresh([getattr(s, n) for n in self.halo_fields])
@@ -154,10 +162,12 @@ class Simulation:
         """Residual force f = P - I on owned nodes: elements, contact, body forces."""
         s = self.store
         self.f[:] = 0.0
+        for eff in self.effects:
+            eff.before_elements(self)
         with self.timers.phase("elements"):
             bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
                                       s.mst, s.hgq, self.hg_coef, 0, s.ne_own, self.f, s.ewint,
-                                      s.ewp)
+                                      s.ewp, getattr(s, "eth", NO_ETH))
         if bad >= 0:
             self.fail(f"element {s.elem_loc[bad]} of body {s.elem_gid[bad]} is inverted or "
                       "its material update failed")

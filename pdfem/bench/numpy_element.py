@@ -111,7 +111,7 @@ def _hg_gamma(xe, bx, by):
 
 
 def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
-                     f, ewint, ewp):
+                     f, ewint, ewp, eth=None):
     """numpy twin of q4_forces_1pt (elastic only); returns -1 or the first bad element."""
     am, _, _ = _bvec(x[conn[e0:e1]] - 0.5 * du[conn[e0:e1]])
     ac, _, _ = _bvec(x[conn[e0:e1]])
@@ -159,7 +159,7 @@ def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e
 
 
 def numpy_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
-                     f, ewint, ewp):
+                     f, ewint, ewp, eth=None):
     """numpy twin of q4_forces_2x2 (elastic only); returns -1 or the first bad element."""
     xc = x[conn[e0:e1]]
     xm = xc - 0.5 * du[conn[e0:e1]]
@@ -221,7 +221,7 @@ def bench_elements(nx=200, ny=200, reps=5, rule="1pt"):
     for name, fn in zip(("numba", "numpy"), kernels[rule], strict=True):
         sig = np.zeros((ne, nip, 4))
         args = (x + du, du, conn, emat, mat, sig, np.zeros((ne, nip, 0)), np.zeros((ne, 2)),
-                0.1, 0, ne, np.zeros_like(x), np.zeros(ne), np.zeros(ne))
+                0.1, 0, ne, np.zeros_like(x), np.zeros(ne), np.zeros(ne), np.zeros((0, 3)))
         fn(*args)  # warm-up (numba compile / cache load)
         t0 = time.perf_counter()
         for _ in range(reps):

@@ -1,7 +1,8 @@
 """``pdfem bench {elements,contact,all}``: print single-core performance figures.
 
 elements: element updates per second of both integration rules, numba kernels vs their numpy
-twins (pdfem.bench.elements). contact: contact detection and force time per step on dense
+twins (pdfem.bench.elements); with --material cap and/or --heat, the cost per element-step of
+those effects in real solver steps beside the elastic baseline (pdfem.bench.effects). contact: contact detection and force time per step on dense
 grain beds of several sizes (pdfem.bench.contact). all: both. Figures are printed, never
 asserted; run on one rank.
 """
@@ -41,6 +42,9 @@ def add_parser(sub):
     al = what.add_parser("all", help="elements, then contact")
     for q in (el, al):
         q.add_argument("--n", default="100000", help="number of elements (default 100000)")
+    el.add_argument("--material", default="elastic", choices=("elastic", "cap"),
+                    help="material of the effect-cost table (default elastic)")
+    el.add_argument("--heat", action="store_true", help="heat on in the effect-cost table")
     for q in (co, al):
         q.add_argument("--sizes", default="1000,10000,100000",
                        help="bed sizes in grains, comma-separated (default 1000,10000,100000)")
@@ -65,7 +69,12 @@ def run(args):
     from pdfem.bench.elements import print_elements
 
     # The chosen benchmarks, each printing its own table
-    if n is not None:
+    effects = args.what == "elements" and (args.material != "elastic" or args.heat)
+    if effects:
+        from pdfem.bench.effects import print_effects
+
+        print_effects(n, repeat, args.material, args.heat, log=_log)
+    elif n is not None:
         print_elements(n, repeat, log=_log)
     if n is not None and sizes is not None:
         _log("")

@@ -1,8 +1,10 @@
 """What an effect is: a scene table that, when present, adds arrays and kernel calls.
 
-An effect plugs into named points of the step (see :mod:`pdfem.solver`):
-``setup`` once, ``body_force`` after the internal and contact forces, ``velocity_terms``
-for what the velocity update needs (damping), ``energy`` for its terms of the balance.
+An effect plugs into named points of the step (see :mod:`pdfem.solver`): ``setup`` once,
+``after_rebuild`` when ghosts and contact candidates were rebuilt, ``before_elements`` ahead of
+the internal forces, ``contact_forces`` (contact), ``body_force`` after the internal and
+contact forces, ``heat`` (step 6), ``stable_dt`` for its limit on the step, and
+``energy_terms`` for its terms of the balance.
 A disabled effect is never constructed, so it allocates nothing and runs no kernel.
 """
 
@@ -20,8 +22,17 @@ class Effect:
     def setup(self, sim):
         """Called once after the initial store exists."""
 
+    def after_rebuild(self, sim):
+        """Called after migration and the rebuild of ghosts (the store is new)."""
+
+    def before_elements(self, sim):
+        """Called ahead of the internal forces of each step."""
+
     def body_force(self, sim):
         """Add forces into sim.f for owned nodes."""
+
+    def heat(self, sim):
+        """Step 6 of the loop: advance the temperatures over sim.dt."""
 
     def energy_terms(self, sim, out):
         """Add per-body energy terms of this effect: out maps term name -> (nb_own,) array."""

@@ -27,11 +27,15 @@ from pdfem.kernels.contact import (
     R_DELTA,
     R_DISS,
     R_ENERGY,
+    R_WIDTH,
     accumulate_sorted,
     contact_dt_min,
     element_pair_forces,
     element_wall_forces,
+    entry_dt_min,
+    max_speed,
 )
+from pdfem.kernels.heat import accumulate_heat_sorted, contact_heat
 from pdfem.kernels.integrate import ACC_FRIC
 from pdfem.kernels.neighbours import body_boxes, grain_pairs, lookup_sorted
 from pdfem.kernels.overlap import candidate_pairs, element_bboxes
@@ -40,6 +44,9 @@ from pdfem.parallel.mpi import allgather_rows
 
 # Beyond RCAP * delta_max the hardening law continues along its tangent (see contact_law)
 RCAP = 0.95
+# A step may close a gap by at most this fraction of delta_max (two bodies each moving at the
+# fastest node speed): the overlap law must see a contact before it is deep
+APPROACH = 0.1
 # Outward normals of the domain walls (pointing into the domain) and their box coordinate
 WALL_SIDES = {"left": ((1.0, 0.0), 0), "bottom": ((0.0, 1.0), 1), "right": ((-1.0, 0.0), 2),
               "top": ((0.0, -1.0), 3)}
@@ -71,6 +78,8 @@ class Contact(Effect):
                 row[L.P_MU] = over.get("friction", table["friction"])
                 row[L.P_RCAP] = RCAP
         self.delta_max = float(self.law[:, :, L.P_DMAX].max())
+        self.delta_min = float(self.law[:, :, L.P_DMAX].min())
+        self.kn0_max = float(self.law[:, :, L.P_KN0].max())
         # Domain walls: the contact law of the [contact] table with the wall friction
         box = scene.resolved["domain"]["box"]
         walls = scene.resolved.get("walls", {})
@@ -83,6 +92,9 @@ class Contact(Effect):
             mu = walls["friction"] if kind == "frictional" else 0.0
             self.walls.append((p0, np.array(normal), mu))
         self.friction = bool(self.law[:, :, L.P_MU].max() > 0 or any(w[2] > 0 for w in self.walls))
+        # Heat across contacts (set by the contact_conductance / friction_heating effects)
+        self.heat_h = 0.0
+        self.heat_fraction = 0.0
         self.gpairs = np.zeros((0, 2), np.int64)
         self._out = np.zeros((1024, 2), np.int64)
         self._last = None
@@ -199,7 +211,7 @@ class Contact(Effect):
                                        us_in[sl], active[sl], nodes[sl], weights[sl], fa[sl],
                                        us_out[sl], res[sl])
         self._check(sim, keys, active, res, bad)
-        self._apply(sim, keys, order, active, nodes, weights, fa, pairs, welems)
+        self._apply(sim, keys, active, nodes, weights, fa, res, pairs)
         self._bookkeeping(sim, keys, order, active, us_out, res, pairs, welems)
         self._last = {"active": active, "nodes": nodes, "res": res, "fa": fa, "keys": keys}
 
@@ -214,9 +226,16 @@ class Contact(Effect):
             other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
             sim.fail(f"contact between body {k[0]} element {k[1]} and {other} is {what}")
 
-    def _apply(self, sim, keys, order, active, nodes, weights, fa, pairs, welems):
-        """Add forces to owned nodes in key order; block-side forces gathered from all ranks."""
+    def _apply(self, sim, keys, active, nodes, weights, fa, res, pairs):
+        """Add forces (and contact heat) to owned nodes in key order; block-side rows are
+        gathered from all ranks."""
         s = sim.store
+        # Heat of each contact on its two sides (this step, over sim.dt)
+        heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and hasattr(sim, "dt")
+        q = np.zeros((active.shape[0], 2))
+        if heat:
+            contact_heat(active, nodes, weights, res, s.T, self.heat_h, self.heat_fraction,
+                         sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1])
         npair = pairs.shape[0]
         isg = s.isglobal[s.elem_body]
         mixed = np.zeros(active.shape[0], bool)
@@ -225,7 +244,7 @@ class Contact(Effect):
         # Canonical orientation puts the grain (lower gid) first: its block side is gathered
         local_nodes[mixed, 2:] = -1
         sel = np.nonzero(mixed & (active == C_ACTIVE))[0]
-        rows = np.concatenate([keys[sel], nodes[sel], weights[sel], fa[sel]], axis=1)
+        rows = np.concatenate([keys[sel], nodes[sel], weights[sel], fa[sel], q[sel]], axis=1)
         rows[:, 4:6] = -1
         if sim.nglobal == 0:
             got = rows
@@ -236,7 +255,12 @@ class Contact(Effect):
         w_all = np.concatenate([weights, got[:, 8:12]])
         f_all = np.concatenate([fa, got[:, 12:14]])
         a_all = np.concatenate([active, np.full(got.shape[0], C_ACTIVE, np.int8)])
-        accumulate_sorted(_lexorder(k_all), a_all, n_all, w_all, f_all, s.nn_own, sim.f)
+        order = _lexorder(k_all)
+        accumulate_sorted(order, a_all, n_all, w_all, f_all, s.nn_own, sim.f)
+        if heat:
+            q_all = np.concatenate([q, got[:, 14:16]])
+            accumulate_heat_sorted(order, a_all, n_all, w_all, q_all[:, 0], q_all[:, 1],
+                                   s.nn_own, sim.heat.src)
 
     def _bookkeeping(self, sim, keys, order, active, us_out, res, pairs, welems):
         """New history table; contact energy and friction per body of side A (counted once)."""
@@ -253,11 +277,17 @@ class Contact(Effect):
 
     # ------------------------------------------------------------------ step size, energy
     def stable_dt(self, sim):
-        """Smallest stable step of the active contacts (their stiffness hardens)."""
+        """Smallest stable step of: any contact that may begin (initial stiffness over a whole
+        boundary edge), the active contacts (their stiffness hardens), and the step in which
+        the fastest approach closes APPROACH x delta_max."""
+        s = sim.store
+        vmax = max_speed(s.v, 0, s.nn_own)
+        dt = APPROACH * self.delta_min / (2.0 * vmax) if vmax > 0.0 else np.inf
+        dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.m, 0, s.ne_own, self.kn0_max))
         if self._last is None:
-            return np.inf
+            return dt
         last = self._last
-        return contact_dt_min(last["active"], last["nodes"], last["res"], sim.store.m)
+        return min(dt, contact_dt_min(last["active"], last["nodes"], last["res"], s.m, s.x))
 
     def energy_terms(self, sim, out):
         e = getattr(self, "energy", None)

@@ -3,7 +3,8 @@
 Layout (everything by global id, so 1-rank and N-rank files compare equal):
     /mesh/node_body (NN,), /mesh/conn (NE,4) global node ids, /mesh/elem_body (NE,),
     /mesh/elem_material (NE,), /mesh/body_kind (NB,) 0 grain 1 block
-    /frames/time (F,), /frames/x (F,NN,2), /frames/v (F,NN,2), /frames/stress (F,NE,nip,4)
+    /frames/time (F,), /frames/x (F,NN,2), /frames/v (F,NN,2), /frames/stress (F,NE,nip,4),
+    /frames/temperature (F,NN) (only with [heat])
     /energy/time (E,) and one (E,) dataset per term, plus /energy/balance_error
     attributes: scene (resolved TOML), effects, pdfem version
 The file is written as ``<path>.part`` and renamed to ``<path>`` only when complete.
@@ -46,7 +47,7 @@ class RunWriter:
         fr = f.create_group("frames")
         # Frame datasets hold at most nframes; they are cut to the frames written at close
         shapes = {"x": (self.nn_tot, 2), "v": (self.nn_tot, 2),
-                  "stress": (self.ne_tot, sim.nip, 4)}
+                  "stress": (self.ne_tot, sim.nip, 4), "temperature": (self.nn_tot,)}
         self.time = fr.create_dataset("time", (nframes,), "f8", maxshape=(None,))
         self.dsets = {}
         for name in self.fields:
@@ -86,19 +87,17 @@ class RunWriter:
             dsets["body_kind"][:] = lay.kind
 
     def write_frame(self, sim):
-        """Write x, v and stress of every body at the current time (collective)."""
+        """Write the frame fields of every body at the current time (collective)."""
         s = sim.store
         nidx, eidx, gn, ge = self._rows(sim)
         k = self.nframe
-        for name, idx, rows, n in (("x", gn, s.x[nidx] if "x" in self.dsets else None,
-                                    self.nn_tot),
-                                   ("v", gn, s.v[nidx] if "v" in self.dsets else None,
-                                    self.nn_tot),
-                                   ("stress", ge, s.sig[eidx] if "stress" in self.dsets
-                                    else None, self.ne_tot)):
-            if name not in self.dsets:
-                continue
-            lo, hi, blk = to_blocks(self.comm, idx, rows, n)
+        # (global rows, local values) of each field, by name
+        source = {"x": (gn, lambda: s.x[nidx]), "v": (gn, lambda: s.v[nidx]),
+                  "stress": (ge, lambda: s.sig[eidx]), "temperature": (gn, lambda: s.T[nidx])}
+        for name in self.dsets:
+            idx, rows = source[name]
+            n = self.nn_tot if idx is gn else self.ne_tot
+            lo, hi, blk = to_blocks(self.comm, idx, rows(), n)
             d = self.dsets[name]
             if hi > lo:
                 d[k, lo:hi] = blk.reshape((hi - lo,) + d.shape[2:])

@@ -30,8 +30,8 @@ import numpy as np
 from numba import njit
 
 from pdfem.kernels.elastic import elastic_energy_density
-from pdfem.kernels.material import material_update
-from pdfem.kernels.params import BULK, RHO, SHEAR
+from pdfem.kernels.material import material_update, softened
+from pdfem.kernels.params import ALPHA, BULK, RHO, SHEAR, SOFT_K, SOFT_Y
 
 GP = 0.5773502691896257  # 1/sqrt(3), 2x2 Gauss abscissa
 XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
@@ -119,11 +119,13 @@ def _grad(ue, dx, dy):
 
 
 @njit(cache=True)
-def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, deps, sold):
-    """Objective update of one point stress s (4,); returns (status, dwp, work density).
+def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold):
+    """Objective update of one point stress s (4,).
 
     (gxx, gxy, gyx, gyy) is the mid-step gradient of du, (c, sn) the Cayley rotation of its
-    skew part.
+    skew part, dth the isotropic thermal strain increment (removed from the material's
+    strain, sigma_zz included). Returns (status, dwp, mechanical work density, thermal-strain
+    work density sigma:deps_th).
     """
     # Rotate the stress, Q sig Q^T with Q = [[c, sn], [-sn, c]]
     sxx = s[0]
@@ -133,17 +135,36 @@ def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, deps, sold):
     s[1] = sn * sn * sxx - 2.0 * c * sn * sxy + c * c * syy
     s[2] = c * sn * (syy - sxx) + (c * c - sn * sn) * sxy
     # Material update with the symmetric part (plane strain)
-    deps[0] = gxx
-    deps[1] = gyy
+    deps[0] = gxx - dth
+    deps[1] = gyy - dth
     deps[2] = 0.5 * (gxy + gyx)
-    deps[3] = 0.0
+    deps[3] = -dth
     for k in range(4):
         sold[k] = s[k]
     status, dwp = material_update(p, s, deps, st)
     # Stress power density, trapezoidal in time
     w = 0.5 * ((sold[0] + s[0]) * deps[0] + (sold[1] + s[1]) * deps[1]
                + 2.0 * (sold[2] + s[2]) * deps[2] + (sold[3] + s[3]) * deps[3])
-    return status, dwp, w
+    wth = 0.5 * dth * (sold[0] + s[0] + sold[1] + s[1] + sold[3] + s[3])
+    return status, dwp, w, wth
+
+
+@njit(cache=True)
+def _thermal(p, eth, e, has_th, pbuf):
+    """Parameter row and thermal strain increment of element e.
+
+    eth[e] = (mean temperature increment of the step, mean temperature, accumulated
+    thermal-strain work sigma:deps_th [J/m]). The thermal strain increment is
+    p[ALPHA] eth[e, 0]; a material with softening coefficients gets its row at eth[e, 1]
+    (material.softened, into pbuf). Without coupling: (p, 0.0).
+    """
+    if not has_th:
+        return p, 0.0
+    dth = p[ALPHA] * eth[e, 0]
+    if p[SOFT_K] != 0.0 or p[SOFT_Y] != 0.0:
+        softened(p, eth[e, 1], pbuf)
+        return pbuf, dth
+    return p, dth
 
 
 @njit(cache=True)
@@ -178,11 +199,12 @@ def _scatter(conn, e, fe, f):
 
 @njit(cache=True)
 def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
-                  f, ewint, ewp):
+                  f, ewint, ewp, eth):
     """One-point quads with FB stiffness hourglass control on elements [e0, e1).
 
     Updates sig (ne,1,4), mstate, hgq (ne,2) in place; subtracts internal forces from f
     (nn,2) element by element; adds stress + hourglass work to ewint and plastic work to ewp.
+    eth (ne, 3) couples temperature in (see _thermal); shape (0, 3) leaves it out.
     Returns -1, or the first element with non-positive area or a failed material update.
     """
     if sig.shape[1] != 1:
@@ -198,10 +220,12 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
     deps = np.empty(4)
     sold = np.empty(4)
     nost = np.zeros(0)
+    pbuf = np.empty(mat_params.shape[1])
     has_state = mstate.shape[0] > 0
     has_hg = hgq.shape[0] > 0
+    has_th = eth.shape[0] > 0
     for e in range(e0, e1):
-        p = mat_params[emat[e]]
+        p, dth = _thermal(mat_params[emat[e]], eth, e, has_th, pbuf)
         _gather(x, du, conn, e, xc, xm, ue)
         # Strain and spin increment from the mid-step mean gradient
         am = _bvec(xm, bx, by)
@@ -211,10 +235,11 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
         c, sn = _cayley(0.5 * (gxy - gyx))
         s = sig[e, 0]
         if has_state:
-            status, dwp, w = _stress_point(p, s, mstate[e, 0], gxx, gxy, gyx, gyy, c, sn,
-                                           deps, sold)
+            status, dwp, w, wth = _stress_point(p, s, mstate[e, 0], gxx, gxy, gyx, gyy, c, sn,
+                                                dth, deps, sold)
         else:
-            status, dwp, w = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn, deps, sold)
+            status, dwp, w, wth = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn, dth,
+                                                deps, sold)
         if status != 0:
             return e
         # Hourglass displacement increment at mid-step
@@ -231,6 +256,8 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
             return e
         ewint[e] += w * a
         ewp[e] += dwp * a
+        if has_th:
+            eth[e, 2] += wth * a
         # Stress divergence forces f_I = A sig . b_I
         for i in range(4):
             fe[i, 0] = a * (s[0] * bx[i] + s[2] * by[i])
@@ -255,11 +282,12 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
 
 @njit(cache=True)
 def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
-                  f, ewint, ewp):
+                  f, ewint, ewp, eth):
     """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hgq and hg_coef are ignored.
 
     Updates sig (ne,4,4) and mstate per point; subtracts internal forces from f element by
     element; adds stress work to ewint and plastic work to ewp (weights x current det J).
+    eth (ne, 3) couples temperature in (see _thermal); shape (0, 3) leaves it out.
     Returns -1, or the first element with a non-positive IP Jacobian or a failed material.
     """
     if sig.shape[1] != 4:
@@ -274,9 +302,11 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
     deps = np.empty(4)
     sold = np.empty(4)
     nost = np.zeros(0)
+    pbuf = np.empty(mat_params.shape[1])
     has_state = mstate.shape[0] > 0
+    has_th = eth.shape[0] > 0
     for e in range(e0, e1):
-        p = mat_params[emat[e]]
+        p, dth = _thermal(mat_params[emat[e]], eth, e, has_th, pbuf)
         _gather(x, du, conn, e, xc, xm, ue)
         for i in range(4):
             fe[i, 0] = 0.0
@@ -291,11 +321,11 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
             c, sn = _cayley(0.5 * (gxy - gyx))
             s = sig[e, ip]
             if has_state:
-                status, dwp, w = _stress_point(p, s, mstate[e, ip], gxx, gxy, gyx, gyy, c, sn,
-                                               deps, sold)
+                status, dwp, w, wth = _stress_point(p, s, mstate[e, ip], gxx, gxy, gyx, gyy,
+                                                    c, sn, dth, deps, sold)
             else:
-                status, dwp, w = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn,
-                                               deps, sold)
+                status, dwp, w, wth = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn,
+                                                    dth, deps, sold)
             if status != 0:
                 return e
             # Forces and work with the current gradients and volume
@@ -304,6 +334,8 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
                 return e
             ewint[e] += w * dv
             ewp[e] += dwp * dv
+            if has_th:
+                eth[e, 2] += wth * dv
             for i in range(4):
                 fe[i, 0] += dv * (s[0] * dx[i] + s[2] * dy[i])
                 fe[i, 1] += dv * (s[2] * dx[i] + s[1] * dy[i])

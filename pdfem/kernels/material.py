@@ -10,10 +10,23 @@ from numba import njit
 
 from pdfem.kernels.cap import cap_initial_state, cap_update
 from pdfem.kernels.elastic import elastic_update
-from pdfem.kernels.params import CAP, ELASTIC, MODEL
+from pdfem.kernels.params import (
+    BULK,
+    CAP,
+    CAP_A,
+    CAP_C,
+    ELASTIC,
+    MODEL,
+    SHEAR,
+    SOFT_K,
+    SOFT_Y,
+    T_REF,
+)
 
 MAT_OK = 0
 MAT_UNKNOWN_MODEL = -1
+# Moduli and strength never soften below this fraction of their reference value
+SOFT_FLOOR = 0.05
 
 
 @njit(cache=True)
@@ -44,3 +57,20 @@ def material_initial_state(mst, emat, mat_params):
         if int(p[MODEL]) == CAP:
             for q in range(mst.shape[1]):
                 cap_initial_state(p, mst[e, q])
+
+
+@njit(cache=True)
+def softened(p, t, out):
+    """Parameter row p at temperature t into out: moduli and strength scaled linearly.
+
+    K, G <- K, G max(SOFT_FLOOR, 1 - p[SOFT_K] (t - p[T_REF])); the cap envelope constants
+    A, C <- A, C max(SOFT_FLOOR, 1 - p[SOFT_Y] (t - p[T_REF])).
+    """
+    for i in range(p.shape[0]):
+        out[i] = p[i]
+    fk = max(SOFT_FLOOR, 1.0 - p[SOFT_K] * (t - p[T_REF]))
+    fy = max(SOFT_FLOOR, 1.0 - p[SOFT_Y] * (t - p[T_REF]))
+    out[BULK] = p[BULK] * fk
+    out[SHEAR] = p[SHEAR] * fk
+    out[CAP_A] = p[CAP_A] * fy
+    out[CAP_C] = p[CAP_C] * fy

@@ -99,7 +99,7 @@ class Section:
 # Names of materials and blocks
 NAME_PATTERN = r"[A-Za-z_][A-Za-z0-9_-]*"
 SIDES = ("left", "right", "bottom", "top")
-OUTPUT_FIELDS = ("x", "v", "stress")
+OUTPUT_FIELDS = ("x", "v", "stress", "temperature")
 
 # [domain]
 DOMAIN = {
@@ -151,6 +151,17 @@ MATERIAL_COMMON = {
     "density": _pos("float", REQUIRED, "mass density", "kg/m^3"),
     "bulk": _pos("float", REQUIRED, "bulk modulus K", "Pa"),
     "shear": _pos("float", REQUIRED, "shear modulus G", "Pa"),
+    "specific_heat": _pos("float", OPTIONAL, "specific heat c (required by [heat])",
+                          "J/(kg K)"),
+    "conductivity": _nonneg("float", OPTIONAL, "thermal conductivity k (required by "
+                            "[conduction])", "W/(m K)"),
+    "expansion": _nonneg("float", OPTIONAL, "linear thermal expansion coefficient alpha "
+                         "(required by [thermal_expansion] and [thermoelastic])", "1/K"),
+    "softening": _nonneg("float", OPTIONAL, "K and G scale by 1 - softening (T - "
+                         "heat.initial), at least 0.05 ([temperature_dependence])", "1/K"),
+    "strength_softening": _nonneg("float", OPTIONAL, "cap A and C scale by 1 - "
+                                  "strength_softening (T - heat.initial), at least 0.05 "
+                                  "([temperature_dependence])", "1/K"),
 }
 
 # [materials.NAME] with model = "cap": Sandler-Rubin cap plasticity (tension positive)
@@ -244,12 +255,34 @@ CONTACT_PAIR = {
     "friction": _nonneg("float", Derived("contact.friction"), "Coulomb friction coefficient"),
 }
 
+# [heat] and the effects that need it
+HEAT = {"initial": _pos("float", 293.15, "initial temperature of every node", "K")}
+CONDUCTION = {}
+DISSIPATION_HEATING = {"beta": Key("float", 0.9, "fraction of the plastic work that becomes "
+                                   "heat (Taylor-Quinney)", lo=0.0, hi=1.0)}
+THERMOELASTIC = {}
+THERMAL_EXPANSION = {}
+TEMPERATURE_DEPENDENCE = {}
+CONTACT_CONDUCTANCE = {"h": _pos("float", REQUIRED, "conductance per unit contact width: heat "
+                                 "flow h x width x (T_B - T_A) per unit thickness",
+                                 "W/(m^2 K)")}
+FRICTION_HEATING = {"fraction": Key("float", 1.0, "fraction of the frictional dissipation "
+                                    "that becomes heat, half on each contact side", lo=0.0,
+                                    hi=1.0, lo_open=True)}
+# [[thermal_bc]]
+THERMAL_BC = {
+    "body": Key("str", REQUIRED, "block name"),
+    "nodes": Key("str", "all", "which nodes of the block", choices=SIDES + ("all",)),
+    "temperature": _pos("float", REQUIRED, "held temperature", "K"),
+}
+
 # [output]
 OUTPUT = {
     "path": Key("str", "pdfem-run.h5", "output HDF5 file, relative to the current directory; "
                 "its directory must exist and be writable"),
     "interval": _pos("float", Derived("time.end / 20"), "time between output frames", "s"),
-    "fields": Key("strlist", list(OUTPUT_FIELDS), "node/element fields written per frame",
+    "fields": Key("strlist", Derived('["x", "v", "stress"], and "temperature" with [heat]'),
+                  "node/element fields written per frame (temperature needs [heat])",
                   choices=OUTPUT_FIELDS),
     "energy_interval": _pos("float", Derived("interval / 10"), "time between energy-balance "
                             "samples", "s"),
@@ -288,9 +321,34 @@ SECTIONS = [
             "present; friction is active when any friction > 0. Sub-tables "
             '`[contact.pairs."mat1:mat2"]` override kn0, delta_max, ks, friction per material '
             "pair.", CONTACT),
+    Section("heat", "table", "Nodal temperatures with a lumped heat capacity (every material "
+            "needs specific_heat). Active only when the table is present; the heat effects "
+            "below need it.", HEAT),
+    Section("conduction", "table", "Heat conduction within each body (every material needs "
+            "conductivity); sub-cycled when its stable step is the tighter one. An empty "
+            "table switches it on.", CONDUCTION),
+    Section("dissipation_heating", "table", "A fraction beta of the plastic work heats the "
+            "element where it is done.", DISSIPATION_HEATING),
+    Section("thermoelastic", "table", "Thermo-elastic coupling: heat -3 K alpha T dV of each "
+            "element's volume change (every material needs expansion).", THERMOELASTIC),
+    Section("thermal_expansion", "table", "Isotropic thermal strain alpha dT in the stress "
+            "update (every material needs expansion).", THERMAL_EXPANSION),
+    Section("temperature_dependence", "table", "Moduli (softening) and cap strength "
+            "(strength_softening) decrease linearly with temperature; at least one material "
+            "must set one of them.", TEMPERATURE_DEPENDENCE),
+    Section("contact_conductance", "table", "Heat flow across contacts (needs [contact]).",
+            CONTACT_CONDUCTANCE),
+    Section("friction_heating", "table", "Frictional dissipation at contacts becomes heat "
+            "(needs [contact] with friction).", FRICTION_HEATING),
+    Section("thermal_bc", "array", "Fixed temperatures, `[[thermal_bc]]`, on block nodes "
+            "(needs [heat]).", THERMAL_BC),
     Section("output", "table", "The HDF5 output file.", OUTPUT),
     Section("run", "table", "Run control.", RUN),
 ]
 
 # Tables that appear in the resolved scene only when given (their presence is the effect)
-PRESENCE_TABLES = ("gravity", "damping", "grains_file", "walls", "contact")
+PRESENCE_TABLES = ("gravity", "damping", "grains_file", "walls", "contact", "heat",
+                   "conduction", "dissipation_heating", "thermoelastic", "thermal_expansion",
+                   "temperature_dependence", "contact_conductance", "friction_heating")
+# The heat effects: each needs [heat]
+HEAT_EFFECTS = PRESENCE_TABLES[6:]

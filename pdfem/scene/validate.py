@@ -65,7 +65,15 @@ def resolve(doc, base_dir):
             raise SceneError("walls.friction", "must be > 0 when a wall is frictional")
     if "contact" in doc:
         r["contact"] = _contact(doc["contact"], mat_ids)
-    r["output"] = _output(doc.get("output", {}), r["time"]["end"])
+    # Heat and the effects that need it
+    for name in ("heat",) + S.HEAT_EFFECTS:
+        if name in doc:
+            r[name] = check_table(doc[name], secs[name].keys, name)
+    if "thermal_bc" in doc:
+        r["thermal_bc"] = [check_table(b, S.THERMAL_BC, f"thermal_bc[{i}]") for i, b in
+                           enumerate(array_of_tables(doc["thermal_bc"], "thermal_bc"))]
+    _heat_rules(r)
+    r["output"] = _output(doc.get("output", {}), r["time"]["end"], "heat" in r)
     r["run"] = check_table(doc.get("run", {}), S.RUN, "run")
     # Geometry at t=0
     grains, label = _grain_arrays(r["grains"], rows, mat_ids)
@@ -222,9 +230,45 @@ def _contact(value, mat_ids):
     return c
 
 
-def _output(value, t_end):
-    """[output]: derived intervals; the output directory must exist and be writable."""
+def _heat_rules(r):
+    """Each heat effect needs [heat] and its inputs: one error naming the missing key."""
+    mats = r["materials"]
+    need = {"heat": ["specific_heat"], "conduction": ["conductivity"],
+            "thermoelastic": ["expansion"], "thermal_expansion": ["expansion"]}
+    for name in ("heat",) + S.HEAT_EFFECTS:
+        if name not in r:
+            continue
+        if name != "heat" and "heat" not in r:
+            raise SceneError(name, "needs the [heat] table (the temperature field)")
+        for key in need.get(name, []):
+            for mname, m in mats.items():
+                if key not in m:
+                    raise SceneError(f"materials.{mname}.{key}", f"required by [{name}]")
+    if "temperature_dependence" in r and not any(m.get("softening", 0.0) > 0.0 or
+                                                 m.get("strength_softening", 0.0) > 0.0
+                                                 for m in mats.values()):
+        raise SceneError("temperature_dependence", "no material sets softening or "
+                         "strength_softening > 0")
+    for name in ("contact_conductance", "friction_heating"):
+        if name in r and "contact" not in r:
+            raise SceneError(name, "needs the [contact] table")
+    if "thermal_bc" in r:
+        if "heat" not in r:
+            raise SceneError("thermal_bc", "needs the [heat] table (the temperature field)")
+        names = [b["name"] for b in r["blocks"]]
+        for i, bc in enumerate(r["thermal_bc"]):
+            if bc["body"] not in names:
+                raise SceneError(f"thermal_bc[{i}].body", f"unknown block {show(bc['body'])} "
+                                 f"(blocks: {', '.join(names) or 'none'})")
+
+
+def _output(value, t_end, heat):
+    """[output]: derived intervals and fields; the output directory must be writable."""
     o = check_table(value, S.OUTPUT, "output")
+    if "fields" not in o:
+        o["fields"] = ["x", "v", "stress"] + (["temperature"] if heat else [])
+    elif "temperature" in o["fields"] and not heat:
+        raise SceneError("output.fields", '"temperature" needs the [heat] table')
     o.setdefault("interval", t_end / 20.0)
     o.setdefault("energy_interval", o["interval"] / 10.0)
     parent = Path(o["path"]).parent

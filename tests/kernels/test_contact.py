@@ -469,8 +469,20 @@ def test_accumulate_order_and_ghosts():
     assert np.array_equal(f, ref) and not f[n_owned:].any()
     # Stable step over the contacts
     m = rng.uniform(1.0, 2.0, len(x))
-    dt = C.contact_dt_min(act, nodes, out[5], m)
-    assert 0 < dt < np.inf
+    res = out[5]
+    dt = C.contact_dt_min(act, nodes, res, m, x)
+    # Reference: stiffness scaled from the overlap width to the longest contact edge
+    ref = np.inf
+    for p in np.nonzero(act == C.C_ACTIVE)[0]:
+        span = max([res[p, C.R_WIDTH]] + [np.hypot(*(x[nodes[p, j + 1]] - x[nodes[p, j]]))
+                                          for j in (0, 2) if nodes[p, j] >= 0])
+        k = res[p, C.R_STIFF] * span / res[p, C.R_WIDTH]
+        ma = min(m[nodes[p, 0]], m[nodes[p, 1]])
+        mb = np.inf if nodes[p, 2] < 0 else min(m[nodes[p, 2]], m[nodes[p, 3]])
+        meff = ma if not np.isfinite(mb) else ma * mb / (ma + mb)
+        ref = min(ref, 0.5 * 2.0 * np.sqrt(meff / k))
+    assert np.isfinite(ref) and dt == pytest.approx(ref, rel=1e-12)
+    assert C.max_speed(np.array([[3.0, 4.0], [0.0, 1.0]]), 0, 2) == 5.0
 
 
 # ---- candidate finders ----

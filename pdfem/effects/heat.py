@@ -1,0 +1,186 @@
+"""The temperature field (scene table [heat]): capacity, sources, sub-cycled update.
+
+With [heat] every node carries a temperature T [K] (initial value heat.initial), a lumped heat
+capacity and, for the bodies' fixed-temperature nodes ([[thermal_bc]]), a held value. Each
+step, after the forces (step 6 of the loop), the heat this step's sources produced is put on
+the nodes and the temperatures advance:
+
+    sources     dissipation heating and thermo-elastic coupling (element_heat, this module),
+                contact conductance and friction heating (added by the contact effect)
+    conduction  only with [conduction]; sub-cycled in n equal sub-steps when its stable step
+                (times time.safety) is shorter than the mechanical step
+    held nodes  reset to their temperature after each sub-step; the heat this takes is kept
+
+The other heat effects (pdfem.effects.thermal, pdfem.effects.contact_heat) only switch parts
+of this on; without [heat] none of them can exist (the scene check says so).
+
+Energy (per body, summed like every other term): thermal = sum C (T - T_initial); the
+heat_sources and heat_bc accumulators hold what the sources and the held nodes added, so that
+thermal - heat_sources - heat_bc stays zero up to round-off (conduction only moves heat);
+thermal_work is the work of the stress on the thermal strain (the element kernels add it).
+"""
+
+import math
+
+import numpy as np
+from mpi4py import MPI
+
+from pdfem.effects.base import Effect
+from pdfem.effects.thermal import fill_column
+from pdfem.kernels.element import q4_lumped_mass
+from pdfem.kernels.heat import (
+    advance_temperature,
+    conduction_flows,
+    conduction_stable_dt,
+    element_heat,
+    element_thermal_state,
+    element_to_nodes,
+    hold_temperature,
+    thermal_energy,
+)
+from pdfem.kernels.integrate import body_sums
+from pdfem.kernels.params import CP, RHO, T_REF
+from pdfem.store import BODY, ELEM, NODE, Field
+
+# Columns of the per-body accumulator hacc
+HACC_SRC = 0  # heat put in by the sources [J/m]
+HACC_BC = 1  # heat put in by held (fixed-temperature) nodes [J/m]
+
+# Sub-steps of conduction per mechanical step are capped: more means a scene error
+NSUB_MAX = 10000
+# Effects whose element update needs the element temperatures (eth)
+COUPLED = ("thermal_expansion", "temperature_dependence")
+
+# Store fields of every heat run, and those of runs with COUPLED effects
+FIELDS = (
+    Field("T", NODE, (), np.float64),
+    Field("tcap", NODE, (), np.float64),
+    Field("tfix", NODE, (), np.int8),
+    Field("tfixv", NODE, (), np.float64),
+    Field("hacc", BODY, (2,), np.float64),
+    Field("ewp_prev", ELEM, (), np.float64),
+)
+COUPLED_FIELDS = (
+    Field("tprev", NODE, (), np.float64),
+    Field("eth", ELEM, (3,), np.float64),
+)
+
+
+class Heat(Effect):
+    """Nodal temperatures, their capacity and their explicit update."""
+
+    name = "heat"
+    halo_fields = ("T",)
+
+    def __init__(self, table, scene):
+        super().__init__(table, scene)
+        self.t_init = float(table["initial"])
+        # Element temperatures exist only for the effects that change the stress with them
+        self.couple_elements = any(k in scene.resolved for k in COUPLED)
+        self.extra_fields = FIELDS + (COUPLED_FIELDS if self.couple_elements else ())
+        # Parts other effects switch on in their setup
+        self.conduction = False
+        self.beta = 0.0
+        self.thermoelastic = False
+        self.nsub = 1
+
+    def setup(self, sim):
+        s = sim.store
+        sim.heat = self
+        fill_column(sim, CP, "specific_heat")
+        sim.mat_params[:, T_REF] = self.t_init
+        s.T[:] = self.t_init
+        if self.couple_elements:
+            s.tprev[:] = self.t_init
+        # Lumped capacity: the lumped mass with rho c in place of rho
+        cap_table = sim.mat_params.copy()
+        cap_table[:, RHO] = sim.mat_params[:, RHO] * sim.mat_params[:, CP]
+        q4_lumped_mass(s.x, s.conn, s.emat, cap_table, 0, s.nelem, s.tcap)
+        self._hold_blocks(sim)
+        self.src = np.zeros(s.nnode)
+        self.q = np.zeros(s.nnode)
+        self.eh = np.zeros(s.nelem)
+
+    def _hold_blocks(self, sim):
+        """Fixed temperatures of [[thermal_bc]] on block node sets (global bodies)."""
+        s = sim.store
+        for bc in sim.resolved.get("thermal_bc", []):
+            i = sim.block_names.index(bc["body"])
+            nodes = sim.block_sets[i][bc["nodes"]] + s.nstart[i]
+            s.tfix[nodes] = 1
+            s.tfixv[nodes] = bc["temperature"]
+
+    def after_rebuild(self, sim):
+        """Scratch arrays follow the new store size (the fields themselves migrate)."""
+        s = sim.store
+        self.src = np.zeros(s.nnode)
+        self.q = np.zeros(s.nnode)
+        self.eh = np.zeros(s.nelem)
+
+    # ------------------------------------------------------------------ hooks of the step
+    def before_elements(self, sim):
+        """Element temperatures and their increments since the last element update."""
+        if not self.couple_elements:
+            return
+        s = sim.store
+        with sim.timers.phase("heat"):
+            element_thermal_state(s.T, s.tprev, s.conn, 0, s.ne_own, s.eth)
+            s.tprev[: s.nn_own] = s.T[: s.nn_own]
+
+    def heat(self, sim):
+        """Sources of this step onto the nodes, then the (sub-cycled) temperature update."""
+        s = sim.store
+        dt = sim.dt
+        with sim.timers.phase("heat"):
+            # Element sources: dissipation heating, thermo-elastic coupling
+            if self.beta > 0.0 or self.thermoelastic:
+                element_heat(s.x, sim.du, s.T, s.conn, s.emat, sim.mat_params, s.ewp,
+                             s.ewp_prev, self.beta, self.thermoelastic, 0, s.ne_own, self.eh)
+                element_to_nodes(s.x, s.conn, 0, s.ne_own, self.eh, self.src)
+            _body_node_sums(self.src, s.node_body, s.nn_own, s.hacc[:, HACC_SRC])
+            # Conduction sub-steps (the sources enter with the first)
+            nsub = self._substeps(sim, dt) if self.conduction else 1
+            h = dt / nsub
+            for _ in range(nsub):
+                if self.conduction:
+                    bad = conduction_flows(s.x, s.T, s.conn, s.emat, sim.mat_params, 0,
+                                           s.ne_own, self.q)
+                    if bad >= 0:
+                        sim.fail(f"element {s.elem_loc[bad]} of body {s.elem_gid[bad]} is "
+                                 "inverted (heat conduction)")
+                advance_temperature(s.T, self.q, self.src, s.tcap, h, s.nn_own)
+                hold_temperature(s.T, s.tcap, s.tfix, s.tfixv, s.node_body, s.nn_own, s.hacc,
+                                 HACC_BC)
+
+    def _substeps(self, sim, dt):
+        """Equal conduction sub-steps within dt, from the global conduction limit."""
+        s = sim.store
+        loc = conduction_stable_dt(s.x, s.conn, s.emat, sim.mat_params, 0, s.ne_own)
+        lim = sim.comm.allreduce(loc, op=MPI.MIN) * sim.safety
+        nsub = 1 if lim >= dt else math.ceil(dt / lim)
+        if nsub > NSUB_MAX:
+            sim.fail(f"heat conduction needs {nsub} sub-steps of {lim:.3e} s per step of "
+                     f"{dt:.3e} s (more than {NSUB_MAX})")
+            nsub = NSUB_MAX
+        self.nsub = nsub
+        return nsub
+
+    def energy_terms(self, sim, out):
+        s = sim.store
+        nb = s.nb_own
+        e = np.empty(nb)
+        thermal_energy(s.T, self.t_init, s.tcap, s.node_body, s.nn_own, e)
+        out["thermal"] = e
+        out["heat_sources"] = s.hacc[:nb, HACC_SRC].copy()
+        out["heat_bc"] = s.hacc[:nb, HACC_BC].copy()
+        if self.couple_elements:
+            w = np.empty(nb)
+            body_sums(s.eth[:, 2], s.estart[:nb], s.ne[:nb], w)
+            out["thermal_work"] = w
+
+
+def _body_node_sums(val, node_body, n1, out):
+    """out[b] += sum of val over the owned nodes of body b (node order, via bincount)."""
+    if n1:
+        out += np.bincount(node_body[:n1], weights=val[:n1], minlength=out.shape[0])[
+            : out.shape[0]]

@@ -1,0 +1,70 @@
+"""The heat effects that switch on a part of [heat] (see pdfem.effects.heat).
+
+Each exists only when its scene table is present, and each needs [heat] (checked with the
+scene). They own no arrays of their own: at setup they fill the material columns their
+kernels read and tell the heat effect what to run.
+
+    [conduction]              conduction within each body (materials' conductivity)
+    [dissipation_heating]     beta x plastic work heats the element (report eq. 48)
+    [thermoelastic]           -3 K alpha T d(volume) heats a compressed element (eq. 48)
+    [thermal_expansion]       isotropic thermal strain alpha dT in the stress update
+    [temperature_dependence]  moduli and strength soften linearly with T (material.softened)
+"""
+
+from pdfem.effects.base import Effect
+from pdfem.kernels.params import ALPHA, COND, SOFT_K, SOFT_Y
+
+
+def fill_column(sim, column, key, default=0.0):
+    """Material column from the resolved [materials] tables (default where a key is absent)."""
+    for i, tbl in enumerate(sim.resolved["materials"].values()):
+        sim.mat_params[i, column] = tbl.get(key, default)
+
+
+class Conduction(Effect):
+    """Heat conduction within bodies; sub-cycled when its limit is the tighter one."""
+
+    name = "conduction"
+
+    def setup(self, sim):
+        fill_column(sim, COND, "conductivity")
+        sim.heat.conduction = True
+
+
+class DissipationHeating(Effect):
+    """A fraction beta of the plastic work becomes heat where it is done."""
+
+    name = "dissipation_heating"
+
+    def setup(self, sim):
+        sim.heat.beta = float(self.table["beta"])
+
+
+class Thermoelastic(Effect):
+    """Thermo-elastic coupling: heating under compression, cooling under expansion."""
+
+    name = "thermoelastic"
+
+    def setup(self, sim):
+        fill_column(sim, ALPHA, "expansion")
+        sim.heat.thermoelastic = True
+
+
+class ThermalExpansion(Effect):
+    """Thermal strain alpha dT (isotropic, sigma_zz included) removed from the elastic strain."""
+
+    name = "thermal_expansion"
+
+    def setup(self, sim):
+        fill_column(sim, ALPHA, "expansion")
+
+
+class TemperatureDependence(Effect):
+    """K, G and the cap strength A, C scale by 1 - s (T - T_initial), never below 5 %."""
+
+    name = "temperature_dependence"
+
+    def setup(self, sim):
+        fill_column(sim, SOFT_K, "softening")
+        fill_column(sim, SOFT_Y, "strength_softening")
+

@@ -1,0 +1,241 @@
+"""Heat in the bodies (report eqs. 48-73): conduction, sources, explicit update, stable step.
+
+Temperatures are nodal [K]; heat quantities are per unit thickness (J/m), as every energy of
+this plane-strain code. The lumped heat capacity of node I is C_I = sum_e rho_e c_e int N_I dA
+(the lumped mass with rho c in place of rho), so the thermal energy sum_I C_I T_I changes
+only through the sources: conduction within a body and conductance across a contact move heat
+without creating any (every element's conduction flows sum to zero).
+
+Update (forward Euler on the lumped system, the explicit form of eqs. 61, 69, 73):
+    T_I <- T_I + (dt q_I + Q_I) / C_I,  q_I = -sum_e int k grad N_I . grad T dA  (2x2 Gauss)
+with Q_I the heat [J/m] the step's sources put on node I. Conduction always uses 2x2 Gauss,
+whatever the mechanical rule, so a checkerboard temperature is never a zero-energy mode.
+
+Stable step of conduction per element: dt_e = rho c L_e^2 / (2 k), L_e = area / longest
+diagonal (the length of the mechanical limit); for a square of side h this is h^2 rho c/(4 k),
+half the exact limit h^2 rho c / (2 k) of the lumped bilinear element.
+
+Sign convention (stress only enters through the thermo-elastic source): tension positive,
+compression negative; a compression (area decrease) of an expanding material heats it.
+"""
+
+import numpy as np
+from numba import njit
+
+from pdfem.kernels.element import ETA, GP, XI, _ip_grad
+from pdfem.kernels.params import ALPHA, BULK, COND, CP, RHO
+
+
+@njit(cache=True)
+def _corners(x, conn, e, xc):
+    """Current corner coordinates of element e into xc (4, 2)."""
+    for i in range(4):
+        xc[i, 0] = x[conn[e, i], 0]
+        xc[i, 1] = x[conn[e, i], 1]
+
+
+@njit(cache=True)
+def conduction_flows(x, temp, conn, emat, mat_params, e0, e1, q):
+    """q[I] += -int k grad N_I . grad T dA over elements [e0, e1) (2x2 Gauss) [W/m].
+
+    Each element adds its four flows node by node, in element order; they sum to zero.
+    Returns -1, or the first element with a non-positive Jacobian.
+    """
+    xc = np.empty((4, 2))
+    dx = np.empty(4)
+    dy = np.empty(4)
+    for e in range(e0, e1):
+        k = mat_params[emat[e], COND]
+        if k == 0.0:
+            continue
+        _corners(x, conn, e, xc)
+        for ip in range(4):
+            dv = _ip_grad(xc, GP * XI[ip], GP * ETA[ip], dx, dy)
+            if dv <= 0.0:
+                return e
+            # Temperature gradient at the point, then the flows -k dv grad N . grad T
+            gx = 0.0
+            gy = 0.0
+            for i in range(4):
+                t = temp[conn[e, i]]
+                gx += dx[i] * t
+                gy += dy[i] * t
+            for i in range(4):
+                q[conn[e, i]] -= k * dv * (dx[i] * gx + dy[i] * gy)
+    return -1
+
+
+@njit(cache=True)
+def conduction_stable_dt(x, conn, emat, mat_params, e0, e1):
+    """Min over conducting elements of rho c L_e^2 / (2 k) (module docstring); inf if none."""
+    dt = np.inf
+    for e in range(e0, e1):
+        p = mat_params[emat[e]]
+        if p[COND] <= 0.0:
+            continue
+        n1 = conn[e, 0]
+        n2 = conn[e, 1]
+        n3 = conn[e, 2]
+        n4 = conn[e, 3]
+        d1x = x[n3, 0] - x[n1, 0]
+        d1y = x[n3, 1] - x[n1, 1]
+        d2x = x[n4, 0] - x[n2, 0]
+        d2y = x[n4, 1] - x[n2, 1]
+        a = 0.5 * (d1x * d2y - d2x * d1y)
+        if a <= 0.0:
+            return 0.0
+        le = a / np.sqrt(max(d1x * d1x + d1y * d1y, d2x * d2x + d2y * d2y))
+        dt = min(dt, p[RHO] * p[CP] * le * le / (2.0 * p[COND]))
+    return dt
+
+
+@njit(cache=True)
+def element_to_nodes(x, conn, e0, e1, val, out):
+    """Spread element quantities val[e] over its nodes by int N_I dA / A: out[I] += ...
+
+    Exact for any quad (2x2 Gauss of the bilinear weights); the four shares sum to val[e].
+    """
+    xc = np.empty((4, 2))
+    dx = np.empty(4)
+    dy = np.empty(4)
+    w = np.empty(4)
+    for e in range(e0, e1):
+        v = val[e]
+        if v == 0.0:
+            continue
+        _corners(x, conn, e, xc)
+        tot = 0.0
+        for i in range(4):
+            w[i] = 0.0
+        for ip in range(4):
+            xi = GP * XI[ip]
+            eta = GP * ETA[ip]
+            det = _ip_grad(xc, xi, eta, dx, dy)
+            for i in range(4):
+                s = 0.25 * (1.0 + XI[i] * xi) * (1.0 + ETA[i] * eta) * det
+                w[i] += s
+                tot += s
+        for i in range(4):
+            out[conn[e, i]] += v * w[i] / tot
+
+
+@njit(cache=True)
+def element_heat(x, du, temp, conn, emat, mat_params, ewp, ewp_prev, beta, thermoelastic,
+                 e0, e1, out):
+    """Heat [J/m] this step's sources put into each element e in [e0, e1): out[e] = ...
+
+    beta (ewp[e] - ewp_prev[e])                 dissipation heating (plastic work, eq. 48)
+    - 3 K alpha T_e (A_e - A_e,old)             thermo-elastic coupling (when thermoelastic)
+    with T_e the mean nodal temperature and A_e,old the area at x - du. ewp_prev is then set
+    to ewp. beta = 0 skips the first term, thermoelastic = False the second.
+    """
+    for e in range(e0, e1):
+        h = 0.0
+        if beta > 0.0:
+            h += beta * (ewp[e] - ewp_prev[e])
+            ewp_prev[e] = ewp[e]
+        if thermoelastic:
+            p = mat_params[emat[e]]
+            a_new = 0.0
+            a_old = 0.0
+            te = 0.0
+            # Areas now and at the step start (shoelace), mean temperature
+            for i in range(4):
+                n = conn[e, i]
+                m = conn[e, (i + 1) % 4]
+                a_new += x[n, 0] * x[m, 1] - x[m, 0] * x[n, 1]
+                a_old += ((x[n, 0] - du[n, 0]) * (x[m, 1] - du[m, 1])
+                          - (x[m, 0] - du[m, 0]) * (x[n, 1] - du[n, 1]))
+                te += 0.25 * temp[n]
+            h -= 3.0 * p[BULK] * p[ALPHA] * te * 0.5 * (a_new - a_old)
+        out[e] = h
+
+
+@njit(cache=True)
+def advance_temperature(temp, q, src, cap, dt, n1):
+    """T_I += (dt q_I + src_I) / C_I for nodes [0, n1); q and src are then cleared."""
+    for i in range(n1):
+        if cap[i] > 0.0:
+            temp[i] += (dt * q[i] + src[i]) / cap[i]
+        q[i] = 0.0
+        src[i] = 0.0
+
+
+@njit(cache=True)
+def hold_temperature(temp, cap, fixed, tfix, node_body, n1, acc, col):
+    """Reset the fixed nodes (fixed[I] = 1) to tfix[I]; acc[b, col] += the heat this took."""
+    for i in range(n1):
+        if fixed[i]:
+            acc[node_body[i], col] += cap[i] * (tfix[i] - temp[i])
+            temp[i] = tfix[i]
+
+
+@njit(cache=True)
+def element_thermal_state(temp, temp_prev, conn, e0, e1, eth):
+    """eth[e] = (mean nodal temperature increment since temp_prev, mean temperature)."""
+    for e in range(e0, e1):
+        dt = 0.0
+        t = 0.0
+        for i in range(4):
+            n = conn[e, i]
+            dt += 0.25 * (temp[n] - temp_prev[n])
+            t += 0.25 * temp[n]
+        eth[e, 0] = dt
+        eth[e, 1] = t
+
+
+@njit(cache=True)
+def thermal_energy(temp, t0, cap, node_body, n1, out):
+    """out[b] = sum over nodes of body b of C_I (T_I - t0) [J/m] (in node order)."""
+    for b in range(out.shape[0]):
+        out[b] = 0.0
+    for i in range(n1):
+        out[node_body[i]] += cap[i] * (temp[i] - t0)
+
+
+@njit(cache=True)
+def contact_heat(active, nodes, weights, res, temp, h, fraction, dt, width_col, diss_col,
+                 qa, qb):
+    """Heat [J/m] of each active contact p on its side A (qa) and side B (qb) this step.
+
+    Conductance: h w (T_B - T_A) dt flows from B to A (w the contact width res[p, width_col],
+    T_A, T_B the weighted temperatures of the two contact edges; a wall side has no
+    temperature and exchanges nothing). Friction: fraction x the step's frictional
+    dissipation res[p, diss_col], half to each side (all of it to A at a wall).
+    """
+    for p in range(active.shape[0]):
+        qa[p] = 0.0
+        qb[p] = 0.0
+        if active[p] != 1:
+            continue
+        # Friction heat, split between the sides
+        fr = fraction * res[p, diss_col]
+        if nodes[p, 2] < 0:
+            qa[p] += fr
+            continue
+        qa[p] += 0.5 * fr
+        qb[p] += 0.5 * fr
+        # Conductance across the contact
+        if h > 0.0:
+            ta = weights[p, 0] * temp[nodes[p, 0]] + weights[p, 1] * temp[nodes[p, 1]]
+            tb = weights[p, 2] * temp[nodes[p, 2]] + weights[p, 3] * temp[nodes[p, 3]]
+            flow = h * res[p, width_col] * (tb - ta) * dt
+            qa[p] += flow
+            qb[p] -= flow
+
+
+@njit(cache=True)
+def accumulate_heat_sorted(order, active, nodes, weights, qa, qb, n_owned, out):
+    """out[node] += w qa (side A nodes) or w qb (side B), contacts in the given order.
+
+    Only owned nodes 0 <= node < n_owned receive heat; pass contacts sorted by global key.
+    """
+    for i in range(order.shape[0]):
+        p = order[i]
+        if active[p] != 1:
+            continue
+        for k in range(4):
+            nd = nodes[p, k]
+            if nd < 0 or nd >= n_owned:
+                continue
+            out[nd] += weights[p, k] * (qa[p] if k < 2 else qb[p])

@@ -1,0 +1,294 @@
+"""Heat (issue 4): conduction, dissipation heating, thermal expansion, energy, effects off."""
+
+import h5py
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from pdfem.driver import run
+from pdfem.effects import REGISTRY
+from pdfem.errors import InputError
+from pdfem.kernels.element import q4_lumped_mass
+from pdfem.kernels.heat import conduction_flows, element_to_nodes
+from pdfem.kernels.params import COND, NPAR, RHO
+from pdfem.scene import parse_scene
+from pdfem.solver import Simulation
+from tests.scenes import collision
+
+SAND = """
+[materials.sand]
+model = "cap"
+density = 1700.0
+bulk = 459673449.19
+shear = 275790280.0
+A = 1723689.25
+B = 9.717528841117968e-08
+C = 1241056.26
+D = 9.717528841117968e-08
+R = 2.5
+W = 0.066
+kappa0 = 0.0
+specific_heat = 800.0
+conductivity = 0.3
+expansion = 1.0e-5
+"""
+
+
+def block_scene(material, box, nx, ny, end, extra="", out="run.h5"):
+    """One block body and the given material table (named m) with optional tables."""
+    return f"""
+[domain]
+box = [{box[0]}, {box[1]}, {box[2]}, {box[3]}]
+
+[time]
+end = {end}
+safety = 0.5
+
+[output]
+path = "{out}"
+interval = {end / 4}
+energy_interval = {end / 40}
+
+{material}
+
+[[blocks]]
+name = "b"
+box = [{box[0]}, {box[1]}, {box[2]}, {box[3]}]
+nx = {nx}
+ny = {ny}
+material = "m"
+{extra}
+"""
+
+
+def simulate(text, tmp_path):
+    return Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
+
+
+# ---- kernels -------------------------------------------------------------------------------
+
+def test_conduction_flows_patch_and_balance():
+    """A linear temperature field drives no flow at interior nodes; flows sum to zero."""
+    rng = np.random.default_rng(4)
+    gx, gy = np.meshgrid(np.arange(4.0), np.arange(4.0), indexing="xy")
+    x = np.stack([gx.ravel(), gy.ravel()], axis=1)
+    x[[5, 6, 9, 10]] += rng.uniform(-0.2, 0.2, (4, 2))
+    n0 = (np.arange(3)[None, :] + 4 * np.arange(3)[:, None]).ravel()
+    conn = np.stack([n0, n0 + 1, n0 + 5, n0 + 4], axis=1).astype(np.int64)
+    mat = np.zeros((1, NPAR))
+    mat[0, COND] = 2.5
+    emat = np.zeros(9, np.int32)
+    temp = 3.0 * x[:, 0] - 2.0 * x[:, 1] + 7.0
+    q = np.zeros(16)
+    assert conduction_flows(x, temp, conn, emat, mat, 0, 9, q) == -1
+    assert np.abs(q[[5, 6, 9, 10]]).max() < 1e-12
+    assert abs(q.sum()) < 1e-12
+    # A boundary node's flow is the flux k grad T . n times its share of the boundary
+    assert q[:4].sum() == pytest.approx(-2.5 * 2.0 * 3.0, rel=1e-12)
+    # element_to_nodes conserves each element's value
+    out = np.zeros(16)
+    element_to_nodes(x, conn, 0, 9, np.arange(1.0, 10.0), out)
+    assert out.sum() == pytest.approx(45.0, rel=1e-14)
+    # The lumped capacity of a parallelogram is a quarter of rho c A per node
+    m = np.zeros(16)
+    mat[0, RHO] = 2.0
+    q4_lumped_mass(x, conn, emat, mat, 0, 1, m)
+    d1, d2 = x[5] - x[0], x[4] - x[1]
+    assert m[[0, 1, 5, 4]].sum() == pytest.approx(0.5 * 2.0 * abs(d1[0] * d2[1] - d1[1] * d2[0]),
+                                                  rel=1e-12)
+
+
+# ---- closed forms through the solver --------------------------------------------------------
+
+def test_conduction_along_a_bar_matches_the_analytic_decay(tmp_path):
+    """T = T0 + dT cos(pi x / L) on an insulated bar decays as exp(-kappa pi^2 t / L^2)."""
+    length, rho, c, k = 0.01, 1000.0, 1000.0, 1.0e4
+    kappa = k / (rho * c)
+    tau = length**2 / (kappa * np.pi**2)
+    mat = f"""[materials.m]
+density = {rho}
+bulk = 1.0e6
+shear = 6.0e5
+specific_heat = {c}
+conductivity = {k}"""
+    text = block_scene(mat, (0.0, 0.0, length, 0.001), 40, 4, 0.5 * tau,
+                       extra="[heat]\ninitial = 300.0\n[conduction]\n")
+    sim = simulate(text, tmp_path)
+    s = sim.store
+    s.T[:] = 300.0 + 10.0 * np.cos(np.pi * s.x[:, 0] / length)
+    while sim.t < sim.t_end:
+        sim.step()
+    assert sim.heat.nsub > 1  # the conduction limit is the tighter one here: sub-cycled
+    exact = 300.0 + 10.0 * np.cos(np.pi * s.x[:, 0] / length) * np.exp(-sim.t / tau)
+    assert np.abs(s.T - exact).max() < 0.01 * 10.0 * np.exp(-sim.t / tau)
+    assert sim.timers.calls["heat"] > 0
+
+
+def compressed_sand(tmp_path, extra, end=2.0e-5, v=-1.0):
+    """A sand block in uniaxial strain: fixed bottom, rollers at the sides, top pushed down."""
+    bcs = f"""
+[[bc]]
+body = "b"
+nodes = "bottom"
+type = "fixed"
+
+[[bc]]
+body = "b"
+nodes = "left"
+type = "roller"
+
+[[bc]]
+body = "b"
+nodes = "right"
+type = "roller"
+
+[[bc]]
+body = "b"
+nodes = "top"
+type = "velocity"
+dof = "y"
+velocity = [0.0, {v}]
+"""
+    text = block_scene(SAND.replace("sand", "m"), (0.0, 0.0, 0.001, 0.001), 4, 4, end,
+                       extra=bcs + extra)
+    return simulate(text, tmp_path)
+
+
+def test_adiabatic_block_heats_by_beta_wp_over_rho_c(tmp_path):
+    sim = compressed_sand(tmp_path, "[heat]\ninitial = 300.0\n[dissipation_heating]\n"
+                          "beta = 0.8\n")
+    while sim.t < sim.t_end:
+        sim.step()
+    s = sim.store
+    wp = s.ewp.sum()
+    assert wp > 0.0
+    # Mean temperature rise (capacity-weighted) against beta W_p / (rho c V)
+    rise = (s.tcap * (s.T - 300.0)).sum() / s.tcap.sum()
+    assert rise == pytest.approx(0.8 * wp / (1700.0 * 800.0 * 1e-6), rel=0.01)
+    # Element by element: each element's heat lands on its nodes (no conduction)
+    assert (s.T - 300.0).min() >= 0.0
+
+
+def test_thermoelastic_block_expands_by_the_thermal_strain(tmp_path):
+    """A free elastic block held at T0 + 100 K expands in plane strain by (1 + nu) alpha dT."""
+    kb, gs, alpha = 12.7e9, 4.4e9, 1.0e-4
+    nu = (3 * kb - 2 * gs) / (2 * (3 * kb + gs))
+    mat = f"""[materials.m]
+density = 1900.0
+bulk = {kb}
+shear = {gs}
+specific_heat = 1000.0
+expansion = {alpha}"""
+    heat = """
+[heat]
+initial = 300.0
+[thermal_expansion]
+[damping]
+gamma = 4.0e6
+[[thermal_bc]]
+body = "b"
+temperature = 400.0
+"""
+    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 4, 4, 6.0e-6, extra=heat)
+    sim = simulate(text, tmp_path)
+    s = sim.store
+    w0 = s.x[:, 0].max() - s.x[:, 0].min()
+    while sim.t < sim.t_end:
+        sim.step()
+    strain = (s.x[:, 0].max() - s.x[:, 0].min()) / w0 - 1.0
+    assert strain == pytest.approx((1 + nu) * alpha * 100.0, rel=0.01)
+    assert np.all(s.T == 400.0)
+
+
+def test_without_heat_no_temperature_exists(tmp_path):
+    mat = """[materials.m]
+density = 1900.0
+bulk = 12.7e9
+shear = 4.4e9"""
+    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, out="cold.h5")
+    sim = simulate(text, tmp_path)
+    assert not hasattr(sim.store, "T") and not hasattr(sim, "heat")
+    assert sim.effect_names == []
+    run(sim, str(tmp_path / "cold.h5"), quiet=True)
+    assert sim.timers.calls["heat"] == 0 and sim.timers.seconds["heat"] == 0.0
+    with h5py.File(tmp_path / "cold.h5") as f:
+        assert "temperature" not in f["frames"]
+        assert f.attrs["effects"] == ""
+
+
+def test_energy_balance_closes_with_heat_on(tmp_path):
+    """Plastic heating, conduction, thermo-elastic coupling and thermal expansion together."""
+    sim = compressed_sand(tmp_path, "[heat]\ninitial = 300.0\n[conduction]\n"
+                          "[dissipation_heating]\n[thermoelastic]\n[thermal_expansion]\n",
+                          end=4.0e-5)
+    out = tmp_path / "hot.h5"
+    summary = run(sim, str(out), quiet=True)
+    with h5py.File(out) as f:
+        err = f["energy/balance_error"][()]
+        thermal = f["energy/thermal"][()]
+        plastic = f["energy/plastic"][()]
+        assert f["frames/temperature"].shape[1] == sim.layout.nnode
+        assert f.attrs["effects"] == ("cap_plasticity,heat,conduction,dissipation_heating,"
+                                      "thermoelastic,thermal_expansion")
+    assert thermal[-1] > 0.5 * plastic[-1] > 0.0
+    assert err.max() < 0.01, err.max()
+    assert summary["balance_error"] < 0.01
+
+
+def test_contact_heat_balance_and_friction(tmp_path):
+    """Two grains collide obliquely with friction: friction heats both, energy closes."""
+    text = collision(v=20.0, mu=0.5, end=6e-6, extra="""
+[heat]
+initial = 300.0
+[conduction]
+[contact_conductance]
+h = 1.0e7
+[friction_heating]
+""")
+    text = text.replace('velocity = [20.0, 0.0]', 'velocity = [20.0, 8.0]')
+    text = text.replace('shear = 4.4e9', 'shear = 4.4e9\nspecific_heat = 1000.0\n'
+                        'conductivity = 0.4', 1)
+    sim = simulate(text, tmp_path)
+    out = tmp_path / "c.h5"
+    run(sim, str(out), quiet=True)
+    with h5py.File(out) as f:
+        err = f["energy/balance_error"][()]
+        fric = f["energy/friction"][()]
+        thermal = f["energy/thermal"][()]
+    assert fric[-1] > 0.0
+    assert thermal[-1] == pytest.approx(fric[-1], rel=1e-6)
+    # The oblique overlap contact itself closes its balance to about 1 % (dt -> 0: 1.1 %)
+    assert err.max() < 0.02
+
+
+@pytest.mark.parametrize("name", [n for n in REGISTRY if n not in
+                                  ("gravity", "damping", "contact", "heat", "cap_plasticity",
+                                   "contact_friction")])
+def test_heat_effect_without_heat_table_is_an_error(tmp_path, name):
+    mat = """[materials.m]
+density = 1900.0
+bulk = 12.7e9
+shear = 4.4e9
+specific_heat = 1.0
+conductivity = 1.0
+expansion = 1e-5
+softening = 1e-3"""
+    body = {"contact_conductance": "h = 1.0"}.get(name, "")
+    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, extra=f"[{name}]\n{body}\n")
+    with pytest.raises(InputError, match=f"{name}: needs the \\[heat\\] table"):
+        parse_scene(text, str(tmp_path))
+
+
+def test_missing_material_input_names_the_key(tmp_path):
+    mat = """[materials.m]
+density = 1900.0
+bulk = 12.7e9
+shear = 4.4e9"""
+    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, extra="[heat]\n")
+    with pytest.raises(InputError, match=r"materials\.m\.specific_heat: required by \[heat\]"):
+        parse_scene(text, str(tmp_path))
+    text = block_scene(mat + "\nspecific_heat = 1.0", (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7,
+                       extra="[heat]\n[conduction]\n")
+    with pytest.raises(InputError, match=r"materials\.m\.conductivity: required by "
+                                         r"\[conduction\]"):
+        parse_scene(text, str(tmp_path))

@@ -186,8 +186,10 @@ class Simulation:
             if hasattr(eff, "stable_dt"):
                 d = eff.stable_dt(self)
                 if d < dt_loc:
-                    dt_loc, limiter = d, f"the {eff.name} stiffness"
+                    dt_loc, limiter = d, eff
         if dt_loc < self.dt_min and not self._fail_msg:
+            if not isinstance(limiter, str):
+                limiter = limiter.dt_limiter(self, dt_loc)
             self.fail(f"stable dt {dt_loc:.3e} s (limited by {limiter}) is below time.dt_min "
                       f"{self.dt_min:.3e} s")
         red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0])

@@ -189,3 +189,15 @@ def test_no_contact_missed_on_a_dense_bed(tmp_path):
                                                 strict=True)
                    if a == C_ACTIVE and k[2] == -2}
     assert floor == found_floor and len(floor) > 0
+
+
+def test_contact_below_dt_min_names_the_bodies(tmp_path):
+    """A contact that needs a step below time.dt_min stops the run naming body and element."""
+    from pdfem.errors import SimulationError
+
+    text = collision(v=20.0, end=4e-6).replace("safety = 0.5", "safety = 0.5\ndt_min = 1.0e-8")
+    with pytest.raises(SimulationError, match=r"below time\.dt_min.*contact\.kn0 on the edges "
+                                              r"of body \d+ element \d+"):
+        sim = Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
+        while sim.t < sim.t_end:
+            sim.step()

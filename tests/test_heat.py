@@ -292,3 +292,32 @@ shear = 4.4e9"""
     with pytest.raises(InputError, match=r"materials\.m\.conductivity: required by "
                                          r"\[conduction\]"):
         parse_scene(text, str(tmp_path))
+
+
+def test_temperature_dependence_softens_the_elastic_increment():
+    """With softening s, a patch strained at T = T_ref + 100 gets K, G x (1 - 100 s)."""
+    from pdfem.kernels.element import q4_forces_1pt
+    from pdfem.kernels.material import SOFT_FLOOR, softened
+    from pdfem.kernels.params import BULK, MODEL, SHEAR, SOFT_K, T_REF
+
+    p = np.zeros(NPAR)
+    p[[RHO, BULK, SHEAR, SOFT_K, T_REF]] = [1900.0, 10e9, 4e9, 2e-3, 300.0]
+    out = np.empty(NPAR)
+    softened(p, 400.0, out)
+    assert out[BULK] == pytest.approx(8e9, rel=1e-14) and out[SHEAR] == pytest.approx(3.2e9)
+    softened(p, 1000.0, out)
+    assert out[BULK] == pytest.approx(SOFT_FLOOR * 10e9)
+    # One element, uniform strain increment at 400 K: sigma = C(T) : deps
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    conn = np.array([[0, 1, 2, 3]], np.int64)
+    du = 1e-6 * x[:, 0:1] * np.array([[1.0, 0.0]])
+    mat = p[None, :].copy()
+    mat[0, MODEL] = 0.0
+    sig = np.zeros((1, 1, 4))
+    eth = np.array([[0.0, 400.0, 0.0]])
+    q4_forces_1pt(x + du, du, conn, np.zeros(1, np.int32), mat, sig, np.zeros((1, 1, 0)),
+                  np.zeros((1, 2)), 0.05, 0, 1, np.zeros((4, 2)), np.zeros(1), np.zeros(1), eth)
+    kb, g = 8e9, 3.2e9
+    # (the mid-step gradient du / (x - du/2) differs from 1e-6 by 5e-7 relative)
+    assert sig[0, 0, 0] == pytest.approx((kb + 4 * g / 3) * 1e-6, rel=1e-5)
+    assert sig[0, 0, 1] == pytest.approx((kb - 2 * g / 3) * 1e-6, rel=1e-5)

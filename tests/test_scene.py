@@ -183,8 +183,12 @@ def test_grains_npz(tmp_path):
 
 
 def test_reference_doc_is_current():
-    """docs/scene-reference.md is generated: python -m pdfem.scene.reference > it."""
+    """docs/scene-reference.md is generated: python -m pdfem.scene.reference > it; the README
+    holds the same text (python -m pdfem.scene.reference --readme)."""
+    from pdfem.scene.reference import readme_body, readme_section
+
     assert (ROOT / "docs" / "scene-reference.md").read_text() == markdown()
+    assert readme_section((ROOT / "README.md").read_text()) == readme_body()
 
 
 # ---------------------------------------------------------------- mistakes

@@ -1,8 +1,9 @@
 """``pdfem bench {elements,contact,all}``: print single-core performance figures.
 
-elements: element updates per second of both integration rules, numba kernels vs their numpy
-twins (pdfem.bench.elements); with --material cap and/or --heat, the cost per element-step of
-those effects in real solver steps beside the elastic baseline (pdfem.bench.effects). contact: contact detection and force time per step on dense
+elements: element updates per second of both integration rules, numba kernels vs their
+numpy twins (pdfem.bench.elements); with --material cap and/or --heat, the cost per
+element-step of those effects in real solver steps beside the elastic baseline
+(pdfem.bench.effects). contact: contact detection and force time per step on dense
 grain beds of several sizes (pdfem.bench.contact). all: both. Figures are printed, never
 asserted; run on one rank.
 """

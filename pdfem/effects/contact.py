@@ -289,6 +289,26 @@ class Contact(Effect):
         last = self._last
         return min(dt, contact_dt_min(last["active"], last["nodes"], last["res"], s.m, s.x))
 
+    def dt_limiter(self, sim, dt):
+        """Words naming what limits the step to dt (for the time.dt_min error): the contact
+        or boundary element whose limit it is, with body and element ids."""
+        s = sim.store
+        if self._last is not None:
+            last = self._last
+            for p in np.nonzero(last["active"] == C_ACTIVE)[0]:
+                sl = slice(p, p + 1)
+                if contact_dt_min(last["active"][sl], last["nodes"][sl], last["res"][sl], s.m,
+                                  s.x) <= dt:
+                    k = last["keys"][p]
+                    other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
+                    return (f"the stiffness of the contact between body {k[0]} element {k[1]} "
+                            f"and {other}")
+        for e in range(s.ne_own):
+            if entry_dt_min(s.x, s.conn, s.ebnd, s.m, e, e + 1, self.kn0_max) <= dt:
+                return (f"contact.kn0 on the edges of body {s.elem_gid[e]} element "
+                        f"{s.elem_loc[e]}")
+        return "the approach speed of the contacts (delta_max / speed)"
+
     def energy_terms(self, sim, out):
         e = getattr(self, "energy", None)
         out["contact"] = e[: sim.store.nb_own] if e is not None and e.shape[0] >= \

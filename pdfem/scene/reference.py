@@ -1,7 +1,8 @@
 """The scene-file reference (docs/scene-reference.md), generated from the schema tables.
 
-``python -m pdfem.scene.reference > docs/scene-reference.md`` regenerates it; a test checks
-that the file in the repository matches, so the documentation cannot drift from the code.
+``python -m pdfem.scene.reference > docs/scene-reference.md`` regenerates it and
+``python -m pdfem.scene.reference --readme`` rewrites the same text between the README's
+scene-reference markers; a test checks both, so the documentation cannot drift from the code.
 """
 
 import math
@@ -75,7 +76,8 @@ def markdown():
     lines = [_INTRO]
     for sec in S.SECTIONS:
         tags = [t for t, on in (("required", sec.required),
-                                ("effect", sec.name in ("gravity", "damping", "contact")))
+                                ("effect", sec.name in S.PRESENCE_TABLES
+                                 and sec.name not in ("walls", "grains_file")))
                 if on]
         suffix = f" ({', '.join(tags)})" if tags else ""
         lines += [f"## `{_heading(sec)}`{suffix}", "", sec.doc, ""] + _rows(sec.keys) + [""]
@@ -93,5 +95,34 @@ def markdown():
     return "\n".join(lines).rstrip("\n") + "\n"
 
 
+# The README section the reference is copied into
+README_BEGIN = ("<!-- scene-reference:begin (generated: python -m pdfem.scene.reference "
+                "--readme) -->")
+README_END = "<!-- scene-reference:end -->"
+
+
+def readme_section(text):
+    """The generated part of a README text (between the markers), or None."""
+    if README_BEGIN not in text or README_END not in text:
+        return None
+    return text.split(README_BEGIN, 1)[1].split(README_END, 1)[0]
+
+
+def readme_body():
+    """What goes between the README markers: the reference, its headings one level down."""
+    lines = markdown().splitlines()[1:]
+    return "\n" + "\n".join("#" + ln if ln.startswith("#") else ln for ln in lines) + "\n"
+
+
 if __name__ == "__main__":
-    print(markdown(), end="")
+    import sys
+    from pathlib import Path
+
+    if sys.argv[1:] == ["--readme"]:
+        path = Path(__file__).resolve().parents[2] / "README.md"
+        text = path.read_text()
+        head, rest = text.split(README_BEGIN, 1)
+        tail = rest.split(README_END, 1)[1]
+        path.write_text(head + README_BEGIN + readme_body() + README_END + tail)
+    else:
+        print(markdown(), end="")

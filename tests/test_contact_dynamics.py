@@ -196,8 +196,8 @@ def test_contact_below_dt_min_names_the_bodies(tmp_path):
     from pdfem.errors import SimulationError
 
     text = collision(v=20.0, end=4e-6).replace("safety = 0.5", "safety = 0.5\ndt_min = 1.0e-8")
-    with pytest.raises(SimulationError, match=r"below time\.dt_min.*contact\.kn0 on the edges "
-                                              r"of body \d+ element \d+"):
+    with pytest.raises(SimulationError, match=r"limited by contact\.kn0 on the edges of body "
+                                              r"\d+ element \d+\) is below time\.dt_min"):
         sim = Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
         while sim.t < sim.t_end:
             sim.step()

@@ -24,6 +24,7 @@ from numba import njit
 
 from pdfem.kernels.element import ETA, GP, XI, _ip_grad
 from pdfem.kernels.params import ALPHA, BULK, COND, CP, RHO
+from pdfem.kernels.stable import element_length
 
 
 @njit(cache=True)
@@ -73,18 +74,9 @@ def conduction_stable_dt(x, conn, emat, mat_params, e0, e1):
         p = mat_params[emat[e]]
         if p[COND] <= 0.0:
             continue
-        n1 = conn[e, 0]
-        n2 = conn[e, 1]
-        n3 = conn[e, 2]
-        n4 = conn[e, 3]
-        d1x = x[n3, 0] - x[n1, 0]
-        d1y = x[n3, 1] - x[n1, 1]
-        d2x = x[n4, 0] - x[n2, 0]
-        d2y = x[n4, 1] - x[n2, 1]
-        a = 0.5 * (d1x * d2y - d2x * d1y)
+        a, le = element_length(x, conn, e)
         if a <= 0.0:
             return 0.0
-        le = a / np.sqrt(max(d1x * d1x + d1y * d1y, d2x * d2x + d2y * d2y))
         dt = min(dt, p[RHO] * p[CP] * le * le / (2.0 * p[COND]))
     return dt
 

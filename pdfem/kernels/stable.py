@@ -15,6 +15,24 @@ from pdfem.kernels.params import BULK, RHO, SHEAR
 
 
 @njit(cache=True)
+def element_length(x, conn, e):
+    """(area, L_e) of element e: L_e = area / longest diagonal (module docstring)."""
+    n1 = conn[e, 0]
+    n2 = conn[e, 1]
+    n3 = conn[e, 2]
+    n4 = conn[e, 3]
+    # Diagonals and area (half their cross product)
+    d1x = x[n3, 0] - x[n1, 0]
+    d1y = x[n3, 1] - x[n1, 1]
+    d2x = x[n4, 0] - x[n2, 0]
+    d2y = x[n4, 1] - x[n2, 1]
+    a = 0.5 * (d1x * d2y - d2x * d1y)
+    if a <= 0.0:
+        return a, 0.0
+    return a, a / np.sqrt(max(d1x * d1x + d1y * d1y, d2x * d2x + d2y * d2y))
+
+
+@njit(cache=True)
 def q4_stable_dt(x, conn, emat, mat_params, e0, e1):
     """Min over elements [e0, e1) of L_e / c_p (see module docstring); +inf if the range is empty.
 
@@ -22,21 +40,11 @@ def q4_stable_dt(x, conn, emat, mat_params, e0, e1):
     """
     dt = np.inf
     for e in range(e0, e1):
-        n1 = conn[e, 0]
-        n2 = conn[e, 1]
-        n3 = conn[e, 2]
-        n4 = conn[e, 3]
-        # Diagonals and area (half their cross product)
-        d1x = x[n3, 0] - x[n1, 0]
-        d1y = x[n3, 1] - x[n1, 1]
-        d2x = x[n4, 0] - x[n2, 0]
-        d2y = x[n4, 1] - x[n2, 1]
-        a = 0.5 * (d1x * d2y - d2x * d1y)
+        a, le = element_length(x, conn, e)
         if a <= 0.0:
             return 0.0
-        dmax = np.sqrt(max(d1x * d1x + d1y * d1y, d2x * d2x + d2y * d2y))
         # P-wave speed of the element's material
         p = mat_params[emat[e]]
         cp = np.sqrt((p[BULK] + 4.0 * p[SHEAR] / 3.0) / p[RHO])
-        dt = min(dt, a / (dmax * cp))
+        dt = min(dt, le / cp)
     return dt

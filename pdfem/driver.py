@@ -30,6 +30,9 @@ def run(sim, out_path, quiet=False, log=print):
     out = r["output"]
     interval, e_interval = out["interval"], out["energy_interval"]
     nframes = math.floor(sim.t_end / interval * (1 + 1e-12)) + 2
+    # Frame datasets are allocated up front (parallel HDF5): no more than the steps allow
+    if sim.max_steps:
+        nframes = min(nframes, sim.max_steps + 2)
     frames, samples = Schedule(interval), Schedule(e_interval)
     writer = RunWriter(out_path, sim, nframes, out["fields"])
     rows, ref = [], None

@@ -48,11 +48,14 @@ class RunWriter:
         # Frame datasets hold at most nframes; they are cut to the frames written at close
         shapes = {"x": (self.nn_tot, 2), "v": (self.nn_tot, 2),
                   "stress": (self.ne_tot, sim.nip, 4), "temperature": (self.nn_tot,)}
-        self.time = fr.create_dataset("time", (nframes,), "f8", maxshape=(None,))
+        # Parallel HDF5 allocates chunked datasets at once: start small, grow by doubling
+        self.nframes_max = nframes
+        cap = min(nframes, 8)
+        self.time = fr.create_dataset("time", (cap,), "f8", maxshape=(None,))
         self.dsets = {}
         for name in self.fields:
             shp = shapes[name]
-            self.dsets[name] = fr.create_dataset(name, (nframes,) + shp, "f8",
+            self.dsets[name] = fr.create_dataset(name, (cap,) + shp, "f8",
                                                  maxshape=(None,) + shp,
                                                  chunks=(1,) + tuple(max(1, n) for n in shp))
         self.nframe = 0
@@ -91,6 +94,12 @@ class RunWriter:
         s = sim.store
         nidx, eidx, gn, ge = self._rows(sim)
         k = self.nframe
+        if k >= self.time.shape[0]:
+            # Collective: every rank writes every frame, so all resize together
+            cap = min(2 * self.time.shape[0], max(self.nframes_max, k + 1))
+            self.time.resize((cap,))
+            for d in self.dsets.values():
+                d.resize((cap,) + d.shape[1:])
         # (global rows, local values) of each field, by name
         source = {"x": (gn, lambda: s.x[nidx]), "v": (gn, lambda: s.v[nidx]),
                   "stress": (ge, lambda: s.sig[eidx]), "temperature": (gn, lambda: s.T[nidx])}

@@ -5,6 +5,7 @@ import sys
 import time
 
 from pdfem.energy import TERMS, balance, global_terms
+from pdfem.gauges import Gauges
 from pdfem.io.h5out import RunWriter
 
 
@@ -34,6 +35,7 @@ def run(sim, out_path, quiet=False, log=print):
     if sim.max_steps:
         nframes = min(nframes, sim.max_steps + 2)
     frames, samples = Schedule(interval), Schedule(e_interval)
+    gauges, gsched = Gauges(sim), Schedule(out["gauge_interval"])
     writer = RunWriter(out_path, sim, nframes, out["fields"])
     rows, ref = [], None
     t0 = time.perf_counter()
@@ -42,6 +44,8 @@ def run(sim, out_path, quiet=False, log=print):
     try:
         # Frame and energy at t = 0
         writer.write_frame(sim)
+        if len(gauges):
+            gauges.sample(sim)
         terms = global_terms(sim)
         if comm.rank == 0:
             ref = terms
@@ -54,6 +58,9 @@ def run(sim, out_path, quiet=False, log=print):
             if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
                 with sim.timers.phase("output"):
                     writer.write_frame(sim)
+            if len(gauges) and (gsched.due(sim.t) or at_end):
+                with sim.timers.phase("diagnostics"):
+                    gauges.sample(sim)
             if samples.due(sim.t) or at_end:
                 with sim.timers.phase("diagnostics"):
                     terms = global_terms(sim)
@@ -65,7 +72,7 @@ def run(sim, out_path, quiet=False, log=print):
                 _progress(sim, now - t0, rows, log)
         ok = True
     finally:
-        writer.close(rows, TERMS, ok=ok)
+        writer.close(rows, TERMS, ok=ok, gauges=gauges)
     wall = time.perf_counter() - t0
     report = sim.timers.report(comm)
     summary = {"steps": sim.nstep, "time": sim.t, "wall_s": wall,

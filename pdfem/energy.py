@@ -5,7 +5,7 @@ gathers the rows and sums each column with math.fsum, whose correctly rounded re
 not depend on the order of the rows. Balance:
     E = K + U_strain + U_contact + V_gravity + D_damping + D_plastic + D_friction - W_bc
         + (E_thermal - Q_sources - Q_bc) + W_thermal_strain
-stays equal to its initial value; the error is |E - E0| over the largest term. With [heat],
+stays equal to its initial value; the error is |E - E0| over the largest term now or at t = 0. With [heat],
 E_thermal = sum C (T - T_initial) grows by what the sources (dissipation, friction, thermo-
 elastic coupling) and the held nodes put in, so the bracket checks that the heat update
 conserves energy while the dissipated terms stay counted once; W_thermal_strain is the work
@@ -67,6 +67,8 @@ def balance(terms, ref):
     """Total energy and the balance error relative to the largest term (ref: t=0 terms)."""
     total = sum(SIGN.get(t, 1.0) * v for t, v in terms.items())
     total0 = sum(SIGN.get(t, 1.0) * v for t, v in ref.items())
-    scale = max([abs(terms[t] - (ref[t] if t == "potential" else 0.0)) for t in terms] + [0.0])
+    # Scale: the largest term now or at t = 0 (potential relative to t = 0)
+    scale = max([abs(v[t] - (ref[t] if t == "potential" else 0.0)) for t in terms
+                 for v in (terms, ref)] + [0.0])
     err = abs(total - total0) / scale if scale > 0 else 0.0
     return total, err

@@ -18,7 +18,7 @@ from partition import CellGrid, partition
 from pdfem import build
 from pdfem.effects import active_effects
 from pdfem.effects.contact import check_contact_scene
-from pdfem.errors import SimulationError
+from pdfem.errors import InputError, SimulationError
 from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
 from pdfem.kernels.material import material_initial_state
@@ -92,6 +92,10 @@ class Simulation:
         grains = build.grain_batch(self.fields, self.nip, self.fields_nst(), level,
                                    mine.astype(np.int64), g["center"][mine], g["axes"][mine],
                                    g["angle"][mine], g["velocity"][mine], g["material"][mine])
+        if "nodes" in g:
+            # A prepared bed: the grain meshes as the preparation left them
+            grains.a["x"] = g["nodes"][mine].reshape(-1, 2).copy()
+            grains.a["v"] = g["node_v"][mine].reshape(-1, 2).copy()
         blocks = r.get("blocks", [])
         bbatch, bsets = build.block_batch(self.fields, self.nip, self.fields_nst(), blocks, ng,
                                           self.mat_ids)
@@ -104,6 +108,8 @@ class Simulation:
                         [])
         batch = Batch.concat(self.fields, [bbatch, grains])
         material_initial_state(batch.a["mst"], batch.a["emat"], self.mat_params)
+        if "elem_sig" in g:
+            self._bed_stress(batch, g, mine, int(bbatch.a["ne"].sum()))
         store = Store(self.fields, batch, batch.nbody)
         q4_lumped_mass(store.x, store.conn, store.emat, self.mat_params, 0, store.ne_own,
                        store.m)
@@ -111,6 +117,18 @@ class Simulation:
             init_state(self, store)
         with self.timers.phase("migration"):
             self.store, self.halo = rebuild(comm, store, self.grid, self.owner, self.nglobal)
+
+    def _bed_stress(self, batch, g, mine, e0):
+        """Stresses and material state of a prepared bed's grains (elements after e0)."""
+        sig, mst = g["elem_sig"], g["elem_mst"]
+        nip, nst = batch.a["sig"].shape[1], batch.a["mst"].shape[2]
+        if sig.shape[2] != nip or mst.shape[3] != nst:
+            raise InputError(f"grains_file: the bed file holds {sig.shape[2]} integration "
+                             f"point(s) and {mst.shape[3]} state variable(s) per element; this "
+                             f"scene has {nip} and {nst} (element.rule and the material models "
+                             "must be the preparation's)")
+        batch.a["sig"][e0:] = sig[mine].reshape(-1, nip, 4)
+        batch.a["mst"][e0:] = mst[mine].reshape(-1, nip, nst)
 
     def fields_nst(self):
         """Number of material state variables per integration point."""

@@ -184,3 +184,147 @@ interval = {end / 4}
 {ELASTIC}
 {extra}
 """ + "\n".join(lines)
+
+
+# Materials of the small shock scenes: HMX-like cap grains, steel-like cap blocks
+SHOCK_MATERIALS = """
+[materials.hmx]
+model = "cap"
+density = 1900.0
+bulk = 12.7e9
+shear = 4.4e9
+A = 2.0e8
+B = 2.0e-9
+C = 1.5e8
+D = 5.0e-10
+R = 2.0
+W = 0.05
+kappa0 = -1.0e9
+
+[materials.steel]
+model = "cap"
+density = 7850.0
+bulk = 160.0e9
+shear = 79.0e9
+A = 1.0e9
+B = 1.0e-9
+C = 5.0e8
+D = 1.0e-10
+R = 2.0
+W = 0.001
+kappa0 = -5.0e9
+"""
+
+_CHAMBER = """
+[contact]
+kn0 = 1.0e16
+delta_max = 3.0e-5
+friction = 0.3
+
+[walls]
+left = "frictionless"
+right = "frictionless"
+
+[[blocks]]
+name = "bottom"
+box = [0.0, 0.0, {width}, 2.0e-4]
+material = "steel"
+
+[[bc]]
+body = "bottom"
+nodes = "bottom"
+type = "fixed"
+
+[[bc]]
+wall = "left"
+type = "roller"
+
+[[bc]]
+wall = "right"
+type = "roller"
+"""
+
+
+def prep_scene(grains=8, width=6.0e-4, height=4.0e-3, seed=7, out="bed.h5"):
+    """A small preparation scene: grains rained into a chamber `width` wide, a weight, relax."""
+    return f"""
+[domain]
+box = [0.0, 0.0, {width}, {height}]
+partition = "strips"
+
+[time]
+end = 1.0
+
+[element]
+rule = "2x2"
+{SHOCK_MATERIALS}{_CHAMBER.format(width=width)}
+[[blocks]]
+name = "weight"
+box = [0.0, {height - 3.0e-4}, {width}, {height}]
+material = "steel"
+
+[prepare]
+grains = {grains}
+seed = {seed}
+semi_axis = [1.0e-4, 1.3e-4]
+aspect = [0.6, 1.0]
+material = "hmx"
+gravity = 5.0e5
+damping = 2.0e4
+stiffness_scale = 0.05
+contact_scale = 1.0e-3
+weight = "weight"
+drop_gap = 1.0e-5
+ke_fraction = 1.0e-5
+phase_time = 2.0e-3
+output = "{out}"
+"""
+
+
+def shock_scene(bed, hammer_y0, width=6.0e-4, height=3.0e-3, end=6.0e-6, speed=288.0,
+                out="shock.h5"):
+    """A small hammer impact on a prepared bed, with the two gauges and the [shock] table."""
+    return f"""
+[domain]
+box = [0.0, 0.0, {width}, {height}]
+partition = "strips"
+
+[time]
+end = {end}
+
+[element]
+rule = "2x2"
+{SHOCK_MATERIALS}{_CHAMBER.format(width=width)}
+[grains_file]
+path = "{bed}"
+material = "hmx"
+
+[[blocks]]
+name = "hammer"
+box = [0.0, {hammer_y0}, {width}, {hammer_y0 + 3.0e-4}]
+material = "steel"
+velocity = [0.0, {-speed}]
+
+[[gauges]]
+name = "hammer"
+body = "hammer"
+side = "bottom"
+
+[[gauges]]
+name = "bottom"
+body = "bottom"
+side = "top"
+
+[shock]
+hammer = "hammer"
+anvil = "bottom"
+hammer_gauge = "hammer"
+anvil_gauge = "bottom"
+plots = "none"
+
+[output]
+path = "{out}"
+interval = 5.0e-8
+energy_interval = 2.5e-8
+gauge_interval = 1.0e-8
+"""

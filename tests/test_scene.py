@@ -97,7 +97,8 @@ def test_minimal_scene_defaults(tmp_path, monkeypatch):
     assert r["domain"]["cell_size"] == pytest.approx(2 * 0.001 + 1e-4)
     assert r["domain"]["partition"] == "rcb" and r["domain"]["rebalance"] == 0.0
     assert r["output"] == {"path": "pdfem-run.h5", "interval": 1e-5 / 20,
-                           "fields": ["x", "v", "stress"], "energy_interval": 1e-5 / 20 / 10}
+                           "fields": ["x", "v", "stress"], "energy_interval": 1e-5 / 20 / 10,
+                           "gauge_interval": 1e-5 / 20 / 10 / 10}
     assert r["run"] == {"seed": 0}
     assert r["blocks"] == [] and r["bc"] == []
     # Effects exist only when their tables do
@@ -416,3 +417,13 @@ def test_validation_timing_1e5_grains(tmp_path, capsys):
     with capsys.disabled():
         print(f"\nscene validation: {s.n_grains} grains (hexagonal bed, npz) in {total:.2f} s; "
               f"overlap test of {n} elongated grains ({i.size} candidate pairs) in {hard:.2f} s")
+
+
+def test_packaged_default_scene_and_bed_load():
+    from pdfem.cli.run import default_scene_path
+
+    sc = load_scene(default_scene_path())
+    r = sc.resolved
+    assert sc.n_grains == 84 and "nodes" in sc.grains and "elem_sig" in sc.grains
+    assert r["materials"]["hmx"]["model"] == "cap" and r["shock"]["hammer"] == "hammer"
+    assert [g["name"] for g in r["gauges"]] == ["hammer", "bottom"]

@@ -22,15 +22,15 @@ def add_parser(sub):
     p.add_argument("--quiet", action="store_true", help="no progress or report")
 
 
-def check_output_path(path, force):
-    """The run file must be new (or --force) and its folder writable."""
+def check_output_path(path, force, key="output.path"):
+    """The output file must be new (or --force) and its folder writable."""
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
-        raise InputError(f"output.path: folder {folder} does not exist")
+        raise InputError(f"{key}: folder {folder} does not exist")
     if not os.access(folder, os.W_OK):
-        raise InputError(f"output.path: folder {folder} is not writable")
+        raise InputError(f"{key}: folder {folder} is not writable")
     if os.path.exists(path) and not force:
-        raise InputError(f"output.path: {path} exists (use --force to overwrite)")
+        raise InputError(f"{key}: {path} exists (use --force to overwrite)")
 
 
 def run(args):
@@ -46,5 +46,27 @@ def run(args):
     if comm.rank == 0 and not args.quiet:
         print(f"pdfem: {scene.path} on {comm.size} rank(s) -> {out}", flush=True)
     sim = Simulation(scene, comm)
-    drive(sim, out, quiet=args.quiet)
+    summary = drive(sim, out, quiet=args.quiet)
+    if "shock" in scene.resolved:
+        shock_report(out, summary, comm, args.quiet)
     return 0
+
+
+def shock_report(out, summary, comm, quiet):
+    """Analyse a finished shock run on rank 0: figures, summary JSON and text next to it."""
+    import time
+
+    from pdfem.analysis import analyse
+    from pdfem.analysis.summary import report_text
+    from pdfem.cli.analyse import prefix_of
+
+    if comm.rank == 0:
+        t0 = time.perf_counter()
+        extra = {"wall_s": summary["wall_s"], "steps": summary["steps"], "ranks": comm.size,
+                 "phases": {k: float(v[2]) for k, v in summary["phases"].items()}}
+        result = analyse(out, prefix_of(out), extra=extra)
+        if not quiet:
+            print(report_text(result))
+            print(f"analysis and figures in {time.perf_counter() - t0:.1f} s: "
+                  f"{prefix_of(out)}-*.png, -summary.json, -summary.txt", flush=True)
+    comm.Barrier()

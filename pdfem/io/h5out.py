@@ -6,6 +6,7 @@ Layout (everything by global id, so 1-rank and N-rank files compare equal):
     /frames/time (F,), /frames/x (F,NN,2), /frames/v (F,NN,2), /frames/stress (F,NE,nip,4),
     /frames/temperature (F,NN) (only with [heat])
     /energy/time (E,) and one (E,) dataset per term, plus /energy/balance_error
+    /gauges/time (G,), /gauges/NAME/velocity (G,2), /gauges/NAME/stress (G,4) (with [[gauges]])
     attributes: scene (resolved TOML), effects, pdfem version
 The file is written as ``<path>.part`` and renamed to ``<path>`` only when complete.
 """
@@ -114,9 +115,11 @@ class RunWriter:
             self.time[k] = sim.t
         self.nframe += 1
 
-    def close(self, energy_rows, terms, ok=True):
-        """Write the energy series (rank 0 holds it), close, and rename into place."""
+    def close(self, energy_rows, terms, ok=True, gauges=None):
+        """Write the energy series and gauges (rank 0 holds them), close, rename into place."""
         comm = self.comm
+        if gauges is not None and len(gauges):
+            self._write_gauges(gauges)
         n = comm.bcast(len(energy_rows) if comm.rank == 0 else None, root=0)
         g = self.f.create_group("energy")
         cols = ("time",) + tuple(terms) + ("total", "balance_error")
@@ -136,3 +139,24 @@ class RunWriter:
             else:
                 os.remove(self.tmp)
         comm.Barrier()
+
+    def _write_gauges(self, gauges):
+        """/gauges/time and per gauge velocity (G, 2) and stress (G, 4) (collective)."""
+        comm = self.comm
+        hist = gauges.history() if comm.rank == 0 else None
+        n = comm.bcast(hist[0].shape[0] if hist else None, root=0)
+        g = self.f.create_group("gauges")
+        t = g.create_dataset("time", (n,), "f8")
+        ds = []
+        for name in gauges.names:
+            sub = g.create_group(name)
+            ds.append((sub.create_dataset("velocity", (n, 2), "f8"),
+                       sub.create_dataset("stress", (n, 4), "f8")))
+        for (gid, elems), name in zip(gauges.sets, gauges.names, strict=True):
+            g[name].attrs["body"] = gid
+            g[name].attrs["elements"] = elems
+        if comm.rank == 0 and n:
+            t[:] = hist[0]
+            for i, (dv, dsig) in enumerate(ds):
+                dv[:] = hist[1][:, i, :2]
+                dsig[:] = hist[1][:, i, 2:]

@@ -39,6 +39,9 @@ def read_grains_file(spec, base_dir, materials):
     path = Path(base_dir, name)
     if not path.is_file():
         raise SceneError("grains_file.path", f"file not found: {path}")
+    # A prepared bed (HDF5): columns plus the node positions and velocities of every grain
+    if path.suffix.lower() in (".h5", ".hdf5"):
+        return _bed_rows(path, name, spec, materials)
     # Read the raw columns
     if path.suffix.lower() == ".npz":
         cols, where, unit = _read_npz(path, name)
@@ -78,6 +81,32 @@ def read_grains_file(spec, base_dir, materials):
         "material": mat,
     }
     return GrainRows(name, unit, where, arrays)
+
+
+def _bed_rows(path, name, spec, materials):
+    """GrainRows of a bed file: every grain of the spec's material, meshes as prepared."""
+    from pdfem.prepare.bedfile import read_bed
+
+    cols, nodes, vel, level, stress, state = read_bed(path, name)
+    n = nodes.shape[0]
+    if "material" not in spec:
+        raise SceneError("grains_file.material", "required with a bed file")
+    if spec["material"] not in materials:
+        raise SceneError("grains_file.material", f"unknown material {show(spec['material'])}")
+    arrays = {
+        "center": nodes.mean(axis=1),
+        "axes": np.stack([cols["a"], cols["b"]], axis=1),
+        "angle": cols["angle"],
+        "velocity": vel.mean(axis=1),
+        "material": np.full(n, materials[spec["material"]], np.int64),
+        "nodes": nodes,
+        "node_v": vel,
+    }
+    if stress is not None:
+        arrays["elem_sig"], arrays["elem_mst"] = stress, state
+    rows = GrainRows(name, "row", np.arange(n, dtype=np.int64), arrays)
+    rows.level = level
+    return rows
 
 
 def _fill(col, n, default):

@@ -276,6 +276,71 @@ THERMAL_BC = {
     "temperature": _pos("float", REQUIRED, "held temperature", "K"),
 }
 
+# [[gauges]]
+GAUGE = {
+    "name": Key("str", REQUIRED, "unique gauge name (letters, digits, _ and -)"),
+    "body": Key("str", OPTIONAL, "block name: the gauge averages elements of this block"),
+    "side": Key("str", OPTIONAL, "with body: the row or column of elements along this side of "
+                "the block (e.g. the hammer's bottom row); default all its elements",
+                choices=SIDES + ("all",)),
+    "element": _nonneg("int", OPTIONAL, "with body: one element of the block (index i + nx j)"),
+    "point": Key("vec2", OPTIONAL, "instead of body: the element (of any grain or block) "
+                 "that contains this point at t = 0; the gauge follows that element", "m"),
+}
+
+# [shock]
+SHOCK = {
+    "hammer": Key("str", REQUIRED, "block that drives the compaction wave (hammer or piston)"),
+    "anvil": Key("str", REQUIRED, "block the wave runs into (the chamber bottom)"),
+    "hammer_gauge": Key("str", REQUIRED, "gauge at the hammer face (velocity and stress)"),
+    "anvil_gauge": Key("str", REQUIRED, "gauge at the anvil face"),
+    "solid_density": _pos("float", Derived("density of the first grain material"),
+                          "grain (crystal) density of the snowplow bound", "kg/m^3"),
+    "front_fraction": Key("float", 0.5, "a grain is behind the front once its downward "
+                          "velocity exceeds this fraction of the hammer's", lo=0.0, hi=1.0,
+                          lo_open=True, hi_open=True),
+    "plots": Key("str", "png", "write the figures (PNG, matplotlib) or not",
+                 choices=("png", "none")),
+    "reference_us": _pos("float", 500.0, "front speed reported by the 1997 study (printed "
+                         "beside ours)", "m/s"),
+    "reference_arrival": _pos("float", 8.0e-6, "arrival time at the bottom reported by the "
+                              "1997 study", "s"),
+    "reference_density": _pos("float", 1240.0, "bed density of the experiment (shot 912: 1.24 "
+                              "g/cm^3), printed beside the scene's", "kg/m^3"),
+    "reference_solid_density": _pos("float", 1900.0, "crystal density of the experiment's "
+                                    "grains (HMX: 1.90 g/cm^3), for its snowplow bound",
+                                    "kg/m^3"),
+}
+
+# [prepare]
+PREPARE = {
+    "grains": Key("int", REQUIRED, "number of grains rained into the chamber", lo=1),
+    "seed": _nonneg("int", 0, "seed of the random sizes, shapes, angles and positions"),
+    "semi_axis": _pos("vec2", REQUIRED, "range [min, max] of the semi-major axis a", "m"),
+    "aspect": _pos("vec2", [0.6, 1.0], "range [min, max] of b/a (<= 1)", hi=1.0),
+    "material": Key("str", REQUIRED, "grain material (the impact scene's)"),
+    "gravity": _pos("float", 2.0e4, "amplified gravity while raining and compacting", "m/s^2"),
+    "damping": _nonneg("float", 2.0e5, "mass-proportional damping while packing", "1/s"),
+    "stiffness_scale": Key("float", 0.01, "factor on the moduli while raining and "
+                           "compacting (longer stable steps)", lo=0.0, hi=1.0,
+                           lo_open=True),
+    "contact_scale": Key("float", 1.0e-3, "factor on contact kn0 and ks while raining and "
+                         "compacting", lo=0.0, hi=1.0, lo_open=True),
+    "mass_scale": Key("float", 1.0e4, "factor on every density in the last (settle) phase, "
+                      "which runs with the scene's own stiffness", lo=1.0),
+    "weight": Key("str", REQUIRED, "block dropped on the bed after the rain (its box is moved "
+                  "to rest just above the highest grain plus drop_gap)"),
+    "drop_gap": _nonneg("float", 0.0, "gap between the bed top and the weight when it is "
+                        "released", "m"),
+    "drop_velocity": _nonneg("float", 0.0, "downward speed of the weight when released", "m/s"),
+    "ke_fraction": Key("float", 1.0e-4, "a phase ends when the kinetic energy is below this "
+                       "fraction of M g_amplified H (grains' mass, chamber height)", lo=0.0,
+                       hi=1.0, lo_open=True, hi_open=True),
+    "phase_time": _pos("float", 2.0e-3, "longest simulated time of each phase", "s"),
+    "output": Key("str", "bed.h5", "the bed file written (relative to the current "
+                  "directory); an impact scene loads it with [grains_file]"),
+}
+
 # [output]
 OUTPUT = {
     "path": Key("str", "pdfem-run.h5", "output HDF5 file, relative to the current directory; "
@@ -286,6 +351,8 @@ OUTPUT = {
                   choices=OUTPUT_FIELDS),
     "energy_interval": _pos("float", Derived("interval / 10"), "time between energy-balance "
                             "samples", "s"),
+    "gauge_interval": _pos("float", Derived("energy_interval / 10"), "time between gauge "
+                           "samples", "s"),
 }
 
 # [run]
@@ -342,6 +409,14 @@ SECTIONS = [
             "(needs [contact] with friction).", FRICTION_HEATING),
     Section("thermal_bc", "array", "Fixed temperatures, `[[thermal_bc]]`, on block nodes "
             "(needs [heat]).", THERMAL_BC),
+    Section("gauges", "array", "Gauges, `[[gauges]]`: mean velocity (of the element nodes) "
+            "and mean Cauchy stress (area-weighted) of a set of elements, sampled every "
+            "output.gauge_interval into the run file.", GAUGE),
+    Section("shock", "table", "Analysis of a hammer-driven compaction run (wave front, jump "
+            "conditions, Hugoniot, figures, summary) done when the run ends.", SHOCK),
+    Section("prepare", "table", "Sample preparation by `python -m pdfem prepare`: grains "
+            "rained into the chamber, a weight dropped on them, relaxation; ignored by "
+            "`run`.", PREPARE),
     Section("output", "table", "The HDF5 output file.", OUTPUT),
     Section("run", "table", "Run control.", RUN),
 ]

@@ -74,8 +74,20 @@ def resolve(doc, base_dir):
                            enumerate(array_of_tables(doc["thermal_bc"], "thermal_bc"))]
     _heat_rules(r)
     r["output"] = _output(doc.get("output", {}), r["time"]["end"], "heat" in r)
+    r["gauges"] = _gauges(doc.get("gauges", []), r["blocks"])
+    if "shock" in doc:
+        r["shock"] = _shock(doc["shock"], r)
+    if "prepare" in doc:
+        r["prepare"] = _prepare(doc["prepare"], r, mat_ids)
     r["run"] = check_table(doc.get("run", {}), S.RUN, "run")
     # Geometry at t=0
+    if rows is not None and "nodes" in rows.arrays:
+        if r["grains"]:
+            raise SceneError("grains", "[[grains]] cannot be combined with a bed file in "
+                             "grains_file")
+        if rows.level != r["element"]["level"]:
+            raise SceneError("element.level", f"must be {rows.level}, the level the bed file "
+                             f"{rows.name} was meshed at (got {r['element']['level']})")
     grains, label = _grain_arrays(r["grains"], rows, mat_ids)
     _geometry(r, grains, label)
     return r, grains, mat_ids, label
@@ -271,6 +283,7 @@ def _output(value, t_end, heat):
         raise SceneError("output.fields", '"temperature" needs the [heat] table')
     o.setdefault("interval", t_end / 20.0)
     o.setdefault("energy_interval", o["interval"] / 10.0)
+    o.setdefault("gauge_interval", o["energy_interval"] / 10.0)
     parent = Path(o["path"]).parent
     if o["path"] == "" or Path(o["path"]).is_dir():
         raise SceneError("output.path", f"must name a file (got {show(o['path'])})")
@@ -278,6 +291,79 @@ def _output(value, t_end, heat):
         raise SceneError("output.path", f"directory {show(str(parent))} does not exist or "
                          "is not writable")
     return {k: o[k] for k in S.OUTPUT}
+
+
+def _gauges(value, blocks):
+    """[[gauges]]: unique names; a block (whole, one side or one element) or a point."""
+    out, names = [], [b["name"] for b in blocks]
+    for i, g in enumerate(array_of_tables(value, "gauges")):
+        p = f"gauges[{i}]"
+        gauge = check_table(g, S.GAUGE, p)
+        if not _NAME.fullmatch(gauge["name"]):
+            raise SceneError(f"{p}.name", f"bad gauge name {show(gauge['name'])} (must match "
+                             f"{S.NAME_PATTERN})")
+        if any(o["name"] == gauge["name"] for o in out):
+            raise SceneError(f"{p}.name", f"duplicate gauge name {show(gauge['name'])}")
+        if ("body" in gauge) == ("point" in gauge):
+            raise SceneError(p, "give exactly one of body (a block name) or point")
+        if "body" in gauge:
+            if gauge["body"] not in names:
+                raise SceneError(f"{p}.body", f"unknown block {show(gauge['body'])} (known: "
+                                 f"{', '.join(names) or 'no blocks'})")
+            if "side" in gauge and "element" in gauge:
+                raise SceneError(p, "give at most one of side and element")
+            blk = blocks[names.index(gauge["body"])]
+            if gauge.get("element", 0) >= blk["nx"] * blk["ny"]:
+                raise SceneError(f"{p}.element", f"must be < {blk['nx'] * blk['ny']} (the "
+                                 f"elements of block {blk['name']}) (got {gauge['element']})")
+            if "element" not in gauge:
+                gauge.setdefault("side", "all")
+        else:
+            for key in ("side", "element"):
+                if key in gauge:
+                    raise SceneError(f"{p}.{key}", "only with body (a point selects one "
+                                     "element)")
+        out.append({k: gauge[k] for k in S.GAUGE if k in gauge})
+    return out
+
+
+def _shock(value, r):
+    """[shock]: blocks and gauges that exist; the solid density."""
+    sh = check_table(value, S.SHOCK, "shock")
+    names = [b["name"] for b in r["blocks"]]
+    for key in ("hammer", "anvil"):
+        if sh[key] not in names:
+            raise SceneError(f"shock.{key}", f"unknown block {show(sh[key])} (known: "
+                             f"{', '.join(names) or 'no blocks'})")
+    gauges = [g["name"] for g in r["gauges"]]
+    for key in ("hammer_gauge", "anvil_gauge"):
+        if sh[key] not in gauges:
+            raise SceneError(f"shock.{key}", f"unknown gauge {show(sh[key])} (known: "
+                             f"{', '.join(gauges) or 'no gauges'})")
+    if "solid_density" not in sh:
+        mat = r.get("grains_file", {}).get("material") or (r["grains"][0]["material"]
+                                                           if r["grains"] else None)
+        if mat is None:
+            raise SceneError("shock.solid_density", "required when no grain material is "
+                             "named (grains_file.material or grains[0].material)")
+        sh["solid_density"] = r["materials"][mat]["density"]
+    return {k: sh[k] for k in S.SHOCK}
+
+
+def _prepare(value, r, mat_ids):
+    """[prepare]: ranges ordered, material and weight known."""
+    pr = check_table(value, S.PREPARE, "prepare")
+    for key in ("semi_axis", "aspect"):
+        if pr[key][0] > pr[key][1]:
+            raise SceneError(f"prepare.{key}", f"min must be <= max (got {pr[key]})")
+    if pr["material"] not in mat_ids:
+        raise SceneError("prepare.material", f"unknown material {show(pr['material'])} "
+                         f"(known: {', '.join(mat_ids)})")
+    names = [b["name"] for b in r["blocks"]]
+    if pr["weight"] not in names:
+        raise SceneError("prepare.weight", f"unknown block {show(pr['weight'])} (known: "
+                         f"{', '.join(names) or 'no blocks'})")
+    return {k: pr[k] for k in S.PREPARE}
 
 
 def _grain_arrays(inline, rows, mat_ids):
@@ -292,6 +378,9 @@ def _grain_arrays(inline, rows, mat_ids):
     }
     if rows is not None:
         arrays = {k: np.concatenate([v, rows.arrays[k]]) for k, v in arrays.items()}
+        for k in ("nodes", "node_v", "elem_sig", "elem_mst"):
+            if k in rows.arrays:
+                arrays[k] = rows.arrays[k]
 
     def label(i):
         """``grains[i]`` or ``grains_file: f.csv line 12 (grain i)``."""
@@ -312,6 +401,8 @@ def _geometry(r, g, label):
         raise SceneError("grains", "the scene has no grains and no blocks")
     # Skin and cell size (0 = auto)
     diam = 2.0 * float(g["axes"].max()) if n else 0.0
+    if n and "nodes" in g:
+        diam = max(diam, float((g["nodes"].max(axis=1) - g["nodes"].min(axis=1)).max()))
     if dom["skin"] == 0.0 and n:
         dom["skin"] = 0.1 * 2.0 * float(g["axes"].min())
     least = diam + dom["skin"]
@@ -325,6 +416,9 @@ def _geometry(r, g, label):
     for i, bb in enumerate(blocks):
         if bb[0] < box[0] or bb[1] < box[1] or bb[2] > box[2] or bb[3] > box[3]:
             raise SceneError(f"blocks[{i}].box", "outside the domain box")
+    if "nodes" in g:
+        _bed_geometry(r, g, label, blocks, box)
+        return
     lo, hi = geo.ellipse_aabb(g["center"], g["axes"], g["angle"])
     i = geo.first_outside(lo, hi, box)
     if i >= 0:
@@ -341,3 +435,28 @@ def _geometry(r, g, label):
     if pair:
         j = label(pair[1])
         raise SceneError(label(pair[0]), f"overlaps {j.replace('grains_file: ', '')} at t=0")
+
+
+def _bed_geometry(r, g, label, blocks, box):
+    """A prepared bed: every node inside the box and outside every block.
+
+    Grains of a bed touch (their contacts carry the overlap of the contact law), so the
+    ellipse overlap test of hand-placed grains does not apply, and a node may lie up to
+    contact.delta_max beyond a wall or inside a block.
+    """
+    nodes = g["nodes"]
+    tol = r["contact"]["delta_max"] if "contact" in r else 0.0
+    lo, hi = nodes.min(axis=1) + tol, nodes.max(axis=1) - tol
+    i = geo.first_outside(lo, hi, box)
+    if i >= 0:
+        raise SceneError(label(i), "outside the domain box")
+    pair = geo.first_block_overlap(blocks)
+    if pair:
+        raise SceneError(f"blocks[{pair[0]}]", f"overlaps blocks[{pair[1]}]")
+    for k, bb in enumerate(blocks):
+        inside = ((nodes[:, :, 0] > bb[0] + tol) & (nodes[:, :, 0] < bb[2] - tol)
+                  & (nodes[:, :, 1] > bb[1] + tol) & (nodes[:, :, 1] < bb[3] - tol)).any(axis=1)
+        hit = np.nonzero(inside)[0]
+        if hit.size:
+            raise SceneError(label(int(hit[0])), f"overlaps blocks[{k}] "
+                             f"({r['blocks'][k]['name']}) at t=0")

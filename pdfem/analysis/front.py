@@ -1,0 +1,222 @@
+"""Compaction front, jump conditions and the bed's Hugoniot from plain arrays.
+
+Heights y are upward; the hammer moves down, so depths and speeds below are positive downward
+and stresses are compressive-positive (-sigma_yy). Undefined results are NaN, never errors.
+The grains "behind the front" (the shocked grains) at a frame are those whose centroid lies
+between the front y_f and the hammer face.
+"""
+
+import numpy as np
+
+NAN = float("nan")
+
+
+def bed_geometry(grain_top0, hammer_y0, anvil_y0, diameter, tol=0.05):
+    """Initial bed top, bottom and height H0.
+
+    The top is the hammer face unless the hammer starts more than ``tol`` grain diameters
+    above the highest grain node; then the highest grain node (``top_from`` says which).
+    """
+    gap = float(hammer_y0 - grain_top0)
+    if gap > tol * diameter:
+        top, src = float(grain_top0), f"highest grain node (hammer {gap:.3g} m above it)"
+    else:
+        top, src = float(hammer_y0), "hammer face"
+    return {"y_top0": top, "y_bottom0": float(anvil_y0), "H0": top - float(anvil_y0),
+            "top_from": src, "gap": gap}
+
+
+def impact_time(time, hammer_y, y_top0):
+    """Time at which the hammer face first reaches the bed top (interpolated); NaN if never."""
+    below = np.flatnonzero(hammer_y <= y_top0)
+    if below.size == 0:
+        return NAN
+    k = below[0]
+    if k == 0:
+        return float(time[0])
+    # Linear interpolation between the last frame above and the first at or below
+    y0, y1 = hammer_y[k - 1], hammer_y[k]
+    return float(time[k - 1] + (y0 - y_top0) / (y0 - y1) * (time[k] - time[k - 1]))
+
+
+def _front_one(gy, gu, gm, yh, ya, thr, layer):
+    """Front height at one frame by scanning layers down from the hammer face."""
+    nl = max(int(np.ceil((yh - ya) / layer)), 1)
+    j = np.clip(np.floor((yh - gy) / layer).astype(np.int64), 0, nl - 1)
+    m = np.bincount(j, weights=gm, minlength=nl)
+    mu = np.bincount(j, weights=gm * gu, minlength=nl)
+    last, bad = None, None
+    # Walk down: skip empty layers, stop at the first that moves slower than the threshold
+    for i in np.flatnonzero(m > 0):
+        if mu[i] / m[i] > thr:
+            last = i
+        else:
+            bad = i
+            break
+    if last is None:
+        return yh
+    if bad is None:
+        return ya
+    # Threshold crossing between the two layer centres
+    c0, c1 = yh - (last + 0.5) * layer, yh - (bad + 0.5) * layer
+    u0, u1 = mu[last] / m[last], mu[bad] / m[bad]
+    return float(np.clip(c0 + (thr - u0) / (u1 - u0) * (c1 - c0), ya, yh))
+
+
+def front_positions(time, grain_y, grain_vy, grain_mass, hammer_y, hammer_vy, anvil_y,
+                    y_top0, layer, fraction=0.5):
+    """Front height y_f (F,), depth d = y_top0 - y_f, and the shocked-grain mask (F, ng).
+
+    A layer (thickness ``layer``, stacked down from the current hammer face) is shocked when
+    its grains' mass-weighted downward velocity exceeds ``fraction`` times the hammer face's
+    downward speed; the front is the threshold crossing below the lowest shocked layer
+    contiguous with the hammer. Before impact (or with the hammer not moving down) y_f is the
+    bed top.
+    """
+    nf = len(time)
+    t_imp = impact_time(time, hammer_y, y_top0)
+    yf = np.full(nf, float(y_top0))
+    for k in range(nf):
+        speed = -hammer_vy[k]
+        if not (time[k] >= t_imp) or not speed > 0:
+            continue
+        top = min(hammer_y[k], y_top0)
+        yf[k] = min(_front_one(grain_y[k], -grain_vy[k], grain_mass, hammer_y[k], anvil_y[k],
+                               fraction * speed, layer), top)
+    shocked = (grain_y > yf[:, None]) & (grain_y < hammer_y[:, None])
+    return {"y_f": yf, "depth": y_top0 - yf, "shocked": shocked, "t_impact": t_imp}
+
+
+def fit_front(time, depth, H0, lo=0.15, hi=0.85, min_frames=3):
+    """Least-squares Us: slope of depth vs time over lo*H0 <= d <= hi*H0.
+
+    The window runs from the first frame reaching lo*H0 to the last before the front first
+    passes hi*H0. Returns us, intercept (d = us t + intercept), the window and its frames,
+    the rms residual of the depths (the front's noise);
+    us is NaN with ``reason`` when fewer than ``min_frames`` frames qualify.
+    """
+    d = np.asarray(depth, float)
+    out = {"us": NAN, "intercept": NAN, "t_start": NAN, "t_end": NAN, "frames": np.array([], int),
+           "n": 0, "reason": "", "lo": lo, "hi": hi, "rms": NAN}
+    start = np.flatnonzero(d >= lo * H0)
+    if start.size == 0:
+        out["reason"] = f"the front never reached {lo:.0%} of the bed height"
+        return out
+    past = np.flatnonzero(d > hi * H0)
+    stop = past[0] if past.size else len(d)
+    idx = np.arange(start[0], stop)
+    idx = idx[(d[idx] >= lo * H0) & (d[idx] <= hi * H0)]
+    out.update(frames=idx, n=int(idx.size))
+    if idx.size < min_frames:
+        out["reason"] = (f"only {idx.size} frame(s) with the front between {lo:.0%} and {hi:.0%}"
+                         f" of the bed height (need {min_frames})")
+        return out
+    us, b = np.polyfit(time[idx], d[idx], 1)
+    rms = np.sqrt(np.mean((d[idx] - us * time[idx] - b) ** 2))
+    out.update(us=float(us), intercept=float(b), t_start=float(time[idx[0]]),
+               t_end=float(time[idx[-1]]), rms=float(rms))
+    return out
+
+
+def first_rise(t, comp, frac=0.1):
+    """First time the compressive series ``comp`` exceeds ``frac`` of its peak; NaN if never."""
+    if comp.size == 0 or not np.nanmax(comp) > 0:
+        return NAN
+    return float(t[np.flatnonzero(comp > frac * np.nanmax(comp))[0]])
+
+
+def window_mean(t, series, t0, t1):
+    """Time average of ``series`` over [t0, t1] (trapezoids on the samples inside); NaN if none."""
+    if not (np.isfinite(t0) and np.isfinite(t1)):
+        return NAN
+    sel = (t >= t0) & (t <= t1)
+    if sel.sum() == 0:
+        return NAN
+    if sel.sum() == 1 or t1 <= t0:
+        return float(np.mean(series[sel]))
+    ts, ss = t[sel], series[sel]
+    return float(np.sum(0.5 * (ss[1:] + ss[:-1]) * np.diff(ts)) / (ts[-1] - ts[0]))
+
+
+def shocked_state(frames, grain_vy, grain_mass, shocked, hammer_y, hammer_vy, y_f, width):
+    """Window means of up (shocked grains' downward velocity), rho1, and the hammer speed."""
+    ups, rhos = [], []
+    for k in frames:
+        m = grain_mass[shocked[k]]
+        if m.sum() <= 0 or hammer_y[k] <= y_f[k]:
+            continue
+        ups.append(np.sum(m * -grain_vy[k][shocked[k]]) / m.sum())
+        rhos.append(m.sum() / (width * (hammer_y[k] - y_f[k])))
+    hs = float(np.mean(-hammer_vy[frames])) if len(frames) else NAN
+    return {"up": float(np.mean(ups)) if ups else NAN,
+            "rho1": float(np.mean(rhos)) if rhos else NAN, "hammer_speed": hs}
+
+
+def jump_closures(rho0, rho1, us, up, sigma):
+    """Mass and momentum jump-condition closures as fractions (NaN where undefined)."""
+    rho0, rho1, us, up, sigma = (np.float64(v) for v in (rho0, rho1, us, up, sigma))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        mass = abs(rho0 * us - rho1 * (us - up)) / (rho0 * us)
+        mom = abs(sigma - rho0 * us * up) / np.fmax(sigma, rho0 * us * up)
+    return {"mass": float(mass), "momentum": float(mom)}
+
+
+def snowplow(up, rho0, rho_s):
+    """Snowplow (full-compaction) wave for particle velocity up: Us, sigma, rho1 = rho_s."""
+    us = up / (1.0 - rho0 / rho_s) if rho0 < rho_s else NAN
+    return {"us": float(us), "sigma": float(rho0 * us * up), "rho1": float(rho_s)}
+
+
+def elastic_speed(material):
+    """Bar-wave bound c = sqrt((K + 4G/3)/rho) of a materials table; NaN without K and G."""
+    if "bulk" not in material or "shear" not in material:
+        return NAN
+    return float(np.sqrt((material["bulk"] + 4.0 * material["shear"] / 3.0)
+                         / material["density"]))
+
+
+def frame_means(time, gauge_time, series):
+    """Means of a gauge ``series`` over each frame's interval (half-way to its neighbours).
+
+    A box filter one frame interval wide: sampling a ringing gauge at the frame times alone
+    would alias the ringing into the frame series.
+    """
+    gt, gs = np.asarray(gauge_time, float), np.asarray(series, float)
+    if gt.size < 2 or len(time) < 2:
+        return np.interp(time, gt, gs) if gt.size else np.full(len(time), NAN)
+    cum = np.concatenate([[0.0], np.cumsum(0.5 * (gs[1:] + gs[:-1]) * np.diff(gt))])
+    mid = 0.5 * (time[1:] + time[:-1])
+    a = np.clip(np.concatenate([[time[0]], mid]), gt[0], gt[-1])
+    b = np.clip(np.concatenate([mid, [time[-1]]]), gt[0], gt[-1])
+    with np.errstate(invalid="ignore", divide="ignore"):
+        m = (np.interp(b, gt, cum) - np.interp(a, gt, cum)) / (b - a)
+    return np.where(b > a, m, np.interp(time, gt, gs))
+
+
+def deceleration_stress(time, hammer_vy, hammer_mass, width, frames=None):
+    """Face stress from the hammer's momentum: (m/W) dv_y/dt, compressive-positive.
+
+    With ``frames``, the least-squares slope over those frames (a float); otherwise per frame
+    (an array, central differences). Independent of the ringing of a thin hammer's gauge.
+    """
+    if frames is None:
+        return hammer_mass / width * np.gradient(hammer_vy, time) if len(time) > 1 else \
+            np.full(len(time), NAN)
+    if len(frames) < 2:
+        return NAN
+    return float(hammer_mass / width * np.polyfit(time[frames], hammer_vy[frames], 1)[0])
+
+
+def hugoniot(time, hammer_y, anvil_y, H0, gauge_time, hammer_comp, anvil_comp, rho0):
+    """Whole-bed Hugoniot per frame: volumetric strain, mean gauge stress, density.
+
+    The stress is the mean of the hammer and anvil gauges, each averaged over the frame's
+    interval (:func:`frame_means`).
+    """
+    H = np.minimum(hammer_y - anvil_y, H0)
+    ev = 1.0 - H / H0
+    stress = 0.5 * (frame_means(time, gauge_time, hammer_comp)
+                    + frame_means(time, gauge_time, anvil_comp))
+    with np.errstate(divide="ignore"):
+        dens = rho0 / (1.0 - ev)
+    return {"ev": ev, "stress": stress, "density": dens}

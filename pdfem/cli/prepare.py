@@ -1,0 +1,32 @@
+"""``pdfem prepare scene.toml [-o bed.h5]``: prepare a granular bed (see pdfem.prepare)."""
+
+import os
+
+from pdfem.cli.run import check_output_path
+
+
+def add_parser(sub):
+    p = sub.add_parser("prepare", help="rain grains into a chamber, drop a weight, relax: "
+                       "write a bed file for an impact scene")
+    p.add_argument("scene", help="preparation scene (TOML with a [prepare] table)")
+    p.add_argument("-o", "--output", default=None, help="bed file (overrides prepare.output)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing bed file")
+
+
+def run(args):
+    from pdfem.parallel.mpi import world
+    from pdfem.prepare.phases import prepare
+    from pdfem.scene import load_scene
+
+    comm = world()
+    scene = load_scene(args.scene)
+    if "prepare" not in scene.resolved:
+        from pdfem.errors import InputError
+
+        raise InputError(f"{args.scene}: prepare: the scene has no [prepare] table")
+    out = os.path.abspath(args.output or scene.resolved["prepare"]["output"])
+    check_output_path(out, args.force, "prepare.output")
+    if comm.rank == 0:
+        print(f"pdfem: preparing {args.scene} on {comm.size} rank(s) -> {out}", flush=True)
+    prepare(args.scene, out, comm)
+    return 0

@@ -1,0 +1,111 @@
+"""Gauges: time histories of the mean velocity and stress of a set of elements.
+
+A gauge is a set of elements of one body: a block's elements along one side (the hammer's
+bottom row, the chamber bottom's top row, the report's fig. 12), one element of a block, or
+the element that contains a given point at t = 0. Each sample is the area-weighted mean over
+the gauge's elements of the element velocity (mean of its four nodes) and of the Cauchy stress
+(mean over its integration points; xx, yy, xy, zz, tension positive). Only the rank that
+owns the body contributes (rank 0 for blocks), so a sample is the same on any rank count.
+"""
+
+import numpy as np
+from mpi4py import MPI
+
+from pdfem.errors import InputError
+
+# Columns of one sample: velocity (2) then stress (4)
+NCOL = 6
+
+
+def block_elements(nx, ny, side):
+    """Element indices (i + nx j) of a block meshed nx by ny along ``side`` (or all)."""
+    ids = np.arange(nx * ny, dtype=np.int64).reshape(ny, nx)
+    sel = {"bottom": ids[0, :], "top": ids[-1, :], "left": ids[:, 0], "right": ids[:, -1],
+           "all": ids.ravel()}
+    return np.sort(sel[side])
+
+
+def _quad_contains(xe, p):
+    """True when point p lies in (or on) the counter-clockwise quad xe (4, 2)."""
+    for k in range(4):
+        a, b = xe[k], xe[(k + 1) % 4]
+        if (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0]) < 0.0:
+            return False
+    return True
+
+
+def _locate(sim, point, where):
+    """(body gid, local element) of the element holding ``point`` at t = 0, any rank."""
+    s, comm = sim.store, sim.comm
+    found = (np.iinfo(np.int64).max, -1)
+    p = np.asarray(point, float)
+    for b in range(s.nb_own):
+        if s.isglobal[b] and comm.rank != 0:
+            continue
+        e0 = s.estart[b]
+        for le in range(s.ne[b]):
+            if _quad_contains(s.x[s.conn[e0 + le]], p):
+                found = min(found, (int(s.gid[b]), le))
+                break
+    best = min(comm.allgather(found))
+    if best[1] < 0:
+        raise InputError(f"{where}.point: no element contains {list(point)} at t=0")
+    return best
+
+
+class Gauges:
+    """The gauges of a run: element sets, and the samples gathered on rank 0."""
+
+    def __init__(self, sim):
+        r = sim.resolved
+        self.names, self.sets = [], []
+        names = [b["name"] for b in r.get("blocks", [])]
+        ng = sim.layout.nbody - len(names)
+        for i, g in enumerate(r.get("gauges", [])):
+            if "body" in g:
+                k = names.index(g["body"])
+                blk = r["blocks"][k]
+                elems = (np.array([g["element"]], np.int64) if "element" in g else
+                         block_elements(blk["nx"], blk["ny"], g["side"]))
+                gid = ng + k
+            else:
+                gid, le = _locate(sim, g["point"], f"gauges[{i}]")
+                elems = np.array([le], np.int64)
+            self.names.append(g["name"])
+            self.sets.append((gid, elems))
+        self.times, self.rows = [], []
+
+    def __len__(self):
+        return len(self.names)
+
+    def values(self, sim):
+        """(ngauge, NCOL) means at the current state, on every rank (collective)."""
+        s, comm = sim.store, sim.comm
+        acc = np.zeros((len(self.names), NCOL + 1))
+        own = s.gid[: s.nb_own]
+        for i, (gid, elems) in enumerate(self.sets):
+            hit = np.nonzero(own == gid)[0]
+            if hit.size == 0 or (s.isglobal[hit[0]] and comm.rank != 0):
+                continue
+            e = s.estart[hit[0]] + elems
+            xe, ve = s.x[s.conn[e]], s.v[s.conn[e]]
+            # Element areas (shoelace) weight the element means
+            area = 0.5 * ((xe[:, 2, 0] - xe[:, 0, 0]) * (xe[:, 3, 1] - xe[:, 1, 1])
+                          - (xe[:, 3, 0] - xe[:, 1, 0]) * (xe[:, 2, 1] - xe[:, 0, 1]))
+            acc[i, 0] = area.sum()
+            acc[i, 1:3] = (area[:, None] * ve.mean(axis=1)).sum(axis=0)
+            acc[i, 3:] = (area[:, None] * s.sig[e].mean(axis=1)).sum(axis=0)
+        comm.Allreduce(MPI.IN_PLACE, acc, op=MPI.SUM)
+        return acc[:, 1:] / np.where(acc[:, :1] > 0.0, acc[:, :1], 1.0)
+
+    def sample(self, sim):
+        """Record one sample (collective; rank 0 keeps the history)."""
+        vals = self.values(sim)
+        if sim.comm.rank == 0:
+            self.times.append(sim.t)
+            self.rows.append(vals)
+
+    def history(self):
+        """(times (G,), values (G, ngauge, NCOL)) on rank 0."""
+        n = len(self.names)
+        return (np.array(self.times), np.array(self.rows).reshape(len(self.times), n, NCOL))

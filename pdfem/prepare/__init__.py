@@ -1,0 +1,1 @@
+"""Sample preparation: raining grains into a chamber, dropping a weight, relaxing."""

@@ -1,0 +1,250 @@
+"""Shock analysis (pdfem.analysis) on synthetic data with a known answer."""
+
+import json
+
+import h5py
+import numpy as np
+import pytest
+
+from pdfem.analysis import analyse
+from pdfem.analysis import front as fr
+from pdfem.analysis.plots import sweep_plot
+from pdfem.errors import InputError
+
+# Steady snowplow-like wave: bed density, density behind the front, particle velocity
+RHO_S, RHO0, RHO1, UP = 1900.0, 1240.0, 1800.0, 288.0
+US = UP / (1.0 - RHO0 / RHO1)
+A = 1.0e-4                      # grain side (two square grains per row)
+S = A * RHO_S / RHO0            # row spacing giving rho0
+NROW = 40
+W = 2 * A
+Y_A = 2.0e-4                    # anvil face
+H0 = NROW * S
+Y_TOP = Y_A + H0
+SIGMA = RHO0 * US * UP
+T_ARR = H0 / US
+
+
+def _square(cx, cy, hx, hy):
+    """Corners (4, 2) of a rectangle, counter-clockwise."""
+    return np.array([[cx - hx, cy - hy], [cx + hx, cy - hy], [cx + hx, cy + hy],
+                     [cx - hx, cy + hy]])
+
+
+def _block_nodes(x0, y0, x1, y1, nx, ny):
+    """Nodes of a block meshed nx by ny, node (i, j) at i + (nx + 1) j."""
+    xs, ys = np.linspace(x0, x1, nx + 1), np.linspace(y0, y1, ny + 1)
+    return np.array([[x, y] for y in ys for x in xs])
+
+
+def _block_conn(nx, ny, base):
+    """Counter-clockwise connectivity of a block's elements."""
+    return np.array([[base + i + (nx + 1) * j, base + i + 1 + (nx + 1) * j,
+                      base + i + 1 + (nx + 1) * (j + 1), base + i + (nx + 1) * (j + 1)]
+                     for j in range(ny) for i in range(nx)])
+
+
+def _grain_centres(t):
+    """Row centres (F, NROW) and downward velocities of the steady wave at times t."""
+    # Row i (top at Y_TOP - i S) starts moving when the front passes its top
+    y0 = Y_TOP - A / 2 - np.arange(NROW) * S
+    hit = np.arange(NROW) * S / US
+    moving = t[:, None] >= hit[None, :]
+    y = np.where(moving, y0 - UP * (t[:, None] - hit), y0)
+    return np.maximum(y, Y_A + A / 2), np.where(moving, UP, 0.0)
+
+
+SCENE = """
+[domain]
+box = [0.0, 0.0, {w}, 0.01]
+[materials.grain]
+density = 1900.0
+bulk = 12.7e9
+shear = 4.4e9
+[materials.steel]
+density = 7850.0
+[[blocks]]
+name = "bottom"
+box = [0.0, 0.0, {w}, {ya}]
+nx = 2
+ny = 1
+material = "steel"
+[[blocks]]
+name = "hammer"
+box = [0.0, {yt}, {w}, {yh}]
+nx = 2
+ny = 1
+material = "steel"
+"""
+SHOCK = """
+[shock]
+hammer = "hammer"
+anvil = "bottom"
+hammer_gauge = "hammer"
+anvil_gauge = "bottom"
+solid_density = 1900.0
+front_fraction = 0.5
+plots = "png"
+reference_us = 500.0
+reference_arrival = 8e-6
+reference_density = 1240.0
+"""
+
+
+def make_run(path, shock=True, nframes=161):
+    """Write a synthetic run file of the steady wave; frames run to 1.05 arrival times."""
+    t = np.linspace(0.0, 1.05 * T_ARR, nframes)
+    yc, u = _grain_centres(t)
+    ng = 2 * NROW
+    # Nodes: grains (4 each, two per row), then the bottom and hammer blocks (6 each)
+    nn = 4 * ng + 12
+    x = np.zeros((nframes, nn, 2))
+    v = np.zeros((nframes, nn, 2))
+    for r in range(NROW):
+        for c in range(2):
+            g = 2 * r + c
+            for k in range(nframes):
+                x[k, 4 * g:4 * g + 4] = _square((c + 0.5) * A, yc[k, r], A / 2, A / 2)
+            v[:, 4 * g:4 * g + 4, 1] = -u[:, r, None]
+    x[:, 4 * ng:4 * ng + 6] = _block_nodes(0.0, 0.0, W, Y_A, 2, 1)
+    hb = _block_nodes(0.0, Y_TOP, W, Y_TOP + 3e-4, 2, 1)
+    x[:, 4 * ng + 6:] = hb[None] - np.outer(UP * t, [0.0, 1.0]).reshape(-1, 1, 2)
+    v[:, 4 * ng + 6:, 1] = -UP
+    conn = np.vstack([np.arange(4 * ng).reshape(ng, 4), _block_conn(2, 1, 4 * ng),
+                      _block_conn(2, 1, 4 * ng + 6)])
+    node_body = np.concatenate([np.repeat(np.arange(ng), 4), np.full(6, ng), np.full(6, ng + 1)])
+    elem_body = np.concatenate([np.arange(ng), [ng, ng, ng + 1, ng + 1]])
+    stress = np.zeros((nframes, len(conn), 1, 4))
+    stress[:, :ng, 0, 1] = np.repeat(-SIGMA * (u > 0), 2, axis=1)
+    # Gauges: the hammer face at sigma from the start, the anvil from the arrival on
+    gt = np.linspace(0.0, t[-1], 4 * nframes)
+    scene = SCENE.format(w=W, ya=Y_A, yt=Y_TOP, yh=Y_TOP + 3e-4) + (SHOCK if shock else "")
+    with h5py.File(path, "w") as f:
+        f.attrs["scene"] = scene
+        f["mesh/conn"], f["mesh/node_body"], f["mesh/elem_body"] = conn, node_body, elem_body
+        f["mesh/elem_material"] = np.concatenate([np.zeros(ng, int), np.ones(4, int)])
+        f["mesh/body_kind"] = np.array([0] * ng + [1, 1], np.int8)
+        f["frames/time"], f["frames/x"], f["frames/v"], f["frames/stress"] = t, x, v, stress
+        f["gauges/time"] = gt
+        for name, s, vg in (("hammer", -SIGMA * np.ones_like(gt), -UP),
+                            ("bottom", -SIGMA * (gt >= T_ARR), 0.0)):
+            f[f"gauges/{name}/velocity"] = np.outer(np.full(len(gt), vg), [0.0, 1.0])
+            f[f"gauges/{name}/stress"] = np.outer(s, [0.0, 1.0, 0.0, 0.0])
+        f["energy/time"] = t
+        f["energy/balance_error"] = np.linspace(0.0, 1e-3, nframes)
+    return path
+
+
+def test_front_on_arrays():
+    """Front positions and Us fit of the steady wave from plain arrays."""
+    t = np.linspace(0.0, 1.05 * T_ARR, 161)
+    yc, u = _grain_centres(t)
+    gm = np.full(NROW, RHO_S * A * W)
+    hy = Y_TOP - UP * t
+    fp = fr.front_positions(t, yc, -u, gm, hy, np.full_like(t, -UP), np.full_like(t, Y_A),
+                            Y_TOP, layer=1.13 * A, fraction=0.5)
+    # Within about a row spacing of the exact front Y_TOP - US t at every frame
+    exact = np.maximum(Y_TOP - US * t, Y_A)
+    assert fp["t_impact"] == 0.0 and np.max(np.abs(fp["y_f"] - exact)) < 1.1 * S
+    fit = fr.fit_front(t, fp["depth"], H0)
+    assert fit["us"] == pytest.approx(US, rel=0.02)
+    assert abs(fit["t_start"] - 0.15 * T_ARR) < 1.1 * S / US
+    assert abs(fit["t_end"] - 0.85 * T_ARR) < 1.1 * S / US
+    st = fr.shocked_state(fit["frames"], -u, gm, fp["shocked"], hy, np.full_like(t, -UP),
+                          fp["y_f"], W)
+    assert st["up"] == pytest.approx(UP, rel=1e-9)
+    assert st["rho1"] == pytest.approx(RHO1, rel=0.04)
+
+
+def test_fit_needs_three_frames():
+    """Too few frames inside the window: Us is NaN and the reason says why."""
+    fit = fr.fit_front(np.array([0.0, 1.0, 2.0]), np.array([0.0, 0.5, 1.0]), 1.0)
+    assert np.isnan(fit["us"]) and "need 3" in fit["reason"]
+    assert "never reached" in fr.fit_front(np.arange(3.0), np.zeros(3), 1.0)["reason"]
+
+
+def test_jump_closures_and_snowplow():
+    """Closure formulas against a hand computation; the 1997 report's snowplow numbers."""
+    jc = fr.jump_closures(1000.0, 2000.0, 500.0, 200.0, 1.2e8)
+    assert jc["mass"] == pytest.approx(abs(1000 * 500 - 2000 * 300) / (1000 * 500))
+    assert jc["momentum"] == pytest.approx((1.2e8 - 1e8) / 1.2e8)
+    sp = fr.snowplow(288.0, 1240.0, 1900.0)
+    assert sp["us"] == pytest.approx(829.1, abs=1.0)
+    assert sp["sigma"] == pytest.approx(1240.0 * sp["us"] * 288.0)
+    assert sp["rho1"] == 1900.0
+    assert np.isnan(fr.jump_closures(1000.0, 2000.0, 0.0, 0.0, 0.0)["mass"])
+    assert fr.elastic_speed({"density": 1900.0, "bulk": 12.7e9, "shear": 4.4e9}) == \
+        pytest.approx(np.sqrt((12.7e9 + 4.4e9 * 4 / 3) / 1900.0))
+    assert np.isnan(fr.elastic_speed({"density": 1900.0}))
+
+
+def test_hugoniot_and_window_mean():
+    """Bed strain from the faces, gauge means over frames, time-averaged window stress."""
+    t = np.linspace(0.0, 1.0, 11)
+    gt = np.linspace(0.0, 1.0, 1001)
+    hug = fr.hugoniot(t, 2.0 - 0.5 * t, np.zeros(11), 2.0, gt, 3.0 * np.ones(1001), gt, 1000.0)
+    assert hug["ev"][-1] == pytest.approx(0.25)
+    assert hug["density"][-1] == pytest.approx(1000.0 / 0.75)
+    assert hug["stress"][5] == pytest.approx(0.5 * (3.0 + 0.5))
+    assert fr.window_mean(gt, gt, 0.2, 0.6) == pytest.approx(0.4)
+    assert fr.first_rise(gt, np.where(gt > 0.3, 1.0, 0.0)) == pytest.approx(gt[gt > 0.3][0])
+    assert np.isnan(fr.first_rise(gt, np.zeros_like(gt)))
+
+
+def test_analyse_synthetic(tmp_path):
+    """analyse(): known Us, up, rho1, sigma, closures, arrival; JSON, text and four PNGs."""
+    path = make_run(str(tmp_path / "run.h5"))
+    prefix = str(tmp_path / "out")
+    s = analyse(path, prefix, extra={"wall": 1.5})
+    assert s["bed"]["rho0"] == pytest.approx(RHO0, rel=1e-9)
+    assert s["bed"]["H0"] == pytest.approx(H0) and s["bed"]["top_from"] == "hammer face"
+    assert s["front"]["us"] == pytest.approx(US, rel=0.02)
+    assert s["shocked"]["up"] == pytest.approx(UP, rel=1e-6)
+    assert s["shocked"]["rho1"] == pytest.approx(RHO1, rel=0.04)
+    assert s["shocked"]["sigma"] == pytest.approx(SIGMA, rel=1e-9)
+    assert s["jump"]["mass_closure"] < 0.04 and s["jump"]["momentum_closure"] < 0.03
+    assert s["front"]["arrival_fit"] == pytest.approx(T_ARR, rel=0.03)
+    assert s["front"]["arrival_gauge"] == pytest.approx(T_ARR, rel=0.01)
+    assert s["gauges"]["hammer_peak"] == pytest.approx(SIGMA)
+    assert s["reference"]["us_min_at_impact_speed"] == pytest.approx(829.1, abs=1.0)
+    assert s["reference"]["up_max_at_reference_us"] == pytest.approx(173.7, abs=0.5)
+    assert s["run"] == {"wall": 1.5}
+    assert s["energy"]["balance_error_last"] == pytest.approx(1e-3)
+    js = json.loads((tmp_path / "out-summary.json").read_text())
+    assert js["front"]["us"] == pytest.approx(s["front"]["us"]) and "arrays" not in js
+    txt = (tmp_path / "out-summary.txt").read_text()
+    assert "Us =" in txt and "1997" in txt
+    for name in ("snapshots", "gauges", "xt", "hugoniot"):
+        data = (tmp_path / f"out-{name}.png").read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 1000
+    assert not list(tmp_path.glob("*.part"))
+
+
+def test_analyse_without_shock_table(tmp_path):
+    """An older file without [shock]: InputError naming the file."""
+    path = make_run(str(tmp_path / "old.h5"), shock=False, nframes=5)
+    with pytest.raises(InputError, match="old.h5: no \\[shock\\] table"):
+        analyse(path, str(tmp_path / "old"))
+
+
+def test_sweep_plot(tmp_path):
+    """The velocity-sweep figure is written."""
+    pts = [{"velocity": v, "us": 2.5 * v, "up": 0.6 * v, "sigma": 1240.0 * 1.5 * v * v,
+            "rho0": 1240.0, "rho1": 1700.0, "solid_density": 1900.0} for v in (100.0, 288.0)]
+    pts.append({"velocity": 400.0, "us": None, "up": None, "sigma": None, "rho0": 1240.0,
+                "rho1": None, "solid_density": 1900.0})
+    sweep_plot(pts, str(tmp_path / "sweep.png"))
+    assert (tmp_path / "sweep.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_analyse_temperature_without_velocities(tmp_path):
+    """Temperature adds a snapshot row; missing velocities are differenced from positions."""
+    path = make_run(str(tmp_path / "heat.h5"))
+    with h5py.File(path, "a") as f:
+        f["frames/temperature"] = 300.0 + np.zeros(f["frames/x"].shape[:2])
+        del f["frames/v"]
+    s = analyse(path, str(tmp_path / "heat"))
+    assert s["front"]["us"] == pytest.approx(US, rel=0.02)
+    assert s["shocked"]["up"] == pytest.approx(UP, rel=0.02)
+    assert any("differenced" in n for n in s["notes"])
+    assert (tmp_path / "heat-snapshots.png").stat().st_size > 1000

@@ -5,9 +5,10 @@ gathers the rows and sums each column with math.fsum, whose correctly rounded re
 not depend on the order of the rows. Balance:
     E = K + U_strain + U_contact + V_gravity + D_damping + D_plastic + D_friction - W_bc
         + (E_thermal - Q_sources - Q_bc) + W_thermal_strain
-stays equal to its initial value; the error is |E - E0| over the largest term now or at t = 0. With [heat],
-E_thermal = sum C (T - T_initial) grows by what the sources (dissipation, friction, thermo-
-elastic coupling) and the held nodes put in, so the bracket checks that the heat update
+stays equal to its initial value; the error is |E - E0| over the largest term now or at
+t = 0. With [heat], E_thermal = sum C (T - T_initial) grows by what the sources
+(dissipation, friction, thermo-elastic coupling) and the held nodes put in, so the bracket
+checks that the heat update
 conserves energy while the dissipated terms stay counted once; W_thermal_strain is the work
 of the stress on the thermal strain (thermal expansion). Without [heat] they are zero.
 """

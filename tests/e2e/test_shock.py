@@ -103,3 +103,28 @@ def test_prepare_never_overwrites_without_force(tmp_path):
     p = pdfem(["prepare", "p.toml"], tmp_path)
     assert p.returncode == 2 and "prepare.output" in p.stderr and "exists" in p.stderr
     assert (tmp_path / "bed.h5").read_bytes() == b"precious"
+
+
+def test_sweep_on_2_ranks(small_bed, tmp_path):
+    top = float(_attrs(small_bed)["bed_top"])
+    (tmp_path / "s.toml").write_text(shock_scene(str(small_bed), top + 1.0e-5,
+                                                 height=top + 5.0e-4, end=2.0e-6))
+    p = pdfem(["sweep", "s.toml", "--velocities", "150,300", "-p", "sw"], tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    pts = json.loads((tmp_path / "sw.json").read_text())
+    assert [q["velocity"] for q in pts] == [150.0, 300.0]
+    # A harder blow drives a faster particle velocity and a higher stress
+    assert pts[1]["up"] > pts[0]["up"] > 0 and pts[1]["sigma"] > pts[0]["sigma"]
+    assert (tmp_path / "sw.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("args,msg", [
+    (["sweep", "s.toml", "--velocities", "fast"], "--velocities: not a list of numbers"),
+    (["sweep", "s.toml", "--velocities=0,-5"], "--velocities: need speeds > 0"),
+    (["analyse", "missing.h5"], "missing.h5: no such run file"),
+])
+def test_bad_sweep_and_analyse_input(tmp_path, args, msg):
+    (tmp_path / "s.toml").write_text(shock_scene("bed.h5", 1.0e-3))
+    p = pdfem(args, tmp_path)
+    assert p.returncode == 2 and msg in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1

@@ -1,12 +1,15 @@
 """Run a scene to its end time: frames and energy at intervals, progress, the run report."""
 
 import math
+import os
 import sys
 import time
 
 from pdfem.energy import TERMS, balance, global_terms
+from pdfem.errors import SimulationError
 from pdfem.gauges import Gauges
 from pdfem.io.h5out import RunWriter
+from pdfem.io.restart import Checkpointer, catch_sigterm
 
 
 class Schedule:
@@ -26,7 +29,13 @@ class Schedule:
 
 
 def run(sim, out_path, quiet=False, log=print):
-    """Advance ``sim`` to its end time writing ``out_path``; return the summary dict."""
+    """Advance ``sim`` to its end time writing ``out_path``; return the summary dict.
+
+    Checkpoints go to ``<out_path>.ckpt.h5`` every ``output.checkpoint_interval`` of simulated
+    time and every ``output.checkpoint_wall`` seconds, and when SIGTERM arrives: then the run
+    writes one, leaves the run file as ``<out_path>.part`` for the restart and returns with
+    ``summary["stopped"]`` set.
+    """
     comm, r = sim.comm, sim.resolved
     out = r["output"]
     interval, e_interval = out["interval"], out["energy_interval"]
@@ -36,48 +45,69 @@ def run(sim, out_path, quiet=False, log=print):
         nframes = min(nframes, sim.max_steps + 2)
     frames, samples = Schedule(interval), Schedule(e_interval)
     gauges, gsched = Gauges(sim), Schedule(out["gauge_interval"])
-    writer = RunWriter(out_path, sim, nframes, out["fields"])
+    ckpt = Checkpointer(sim, out_path, out)
+    writer = RunWriter(out_path, sim, nframes, out["fields"],
+                       resume=ckpt.state.get("nframe") if sim.restarted else None)
     rows, ref = [], None
+    start = (sim.nstep, sim.t)
     t0 = time.perf_counter()
     last_log = t0
-    ok = False
+    stopped = False
     try:
-        # Frame and energy at t = 0
-        writer.write_frame(sim)
-        if len(gauges):
-            gauges.sample(sim)
-        terms = global_terms(sim)
-        if comm.rank == 0:
-            ref = terms
-            rows.append(_row(sim.t, terms, ref))
-        while sim.t < sim.t_end * (1 - 1e-12):
-            if sim.max_steps and sim.nstep >= sim.max_steps:
-                break
-            sim.step()
-            at_end = sim.t >= sim.t_end * (1 - 1e-12)
-            if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
-                with sim.timers.phase("output"):
-                    writer.write_frame(sim)
-            if len(gauges) and (gsched.due(sim.t) or at_end):
-                with sim.timers.phase("diagnostics"):
-                    gauges.sample(sim)
-            if samples.due(sim.t) or at_end:
-                with sim.timers.phase("diagnostics"):
-                    terms = global_terms(sim)
-                    if comm.rank == 0:
-                        rows.append(_row(sim.t, terms, ref))
-            now = time.perf_counter()
-            if comm.rank == 0 and not quiet and now - last_log > 2.0:
-                last_log = now
-                _progress(sim, now - t0, rows, log)
-        ok = True
-    finally:
-        writer.close(rows, TERMS, ok=ok, gauges=gauges)
+        if sim.restarted:
+            rows, ref = ckpt.restore(frames, samples, gsched, gauges, writer, log)
+        else:
+            # Frame and energy at t = 0
+            writer.write_frame(sim)
+            if len(gauges):
+                gauges.sample(sim)
+            terms = global_terms(sim)
+            if comm.rank == 0:
+                ref = terms
+                rows.append(_row(sim.t, terms, ref))
+        with catch_sigterm(sim):
+            while sim.t < sim.t_end * (1 - 1e-12):
+                if sim.max_steps and sim.nstep >= sim.max_steps:
+                    break
+                sim.step()
+                at_end = sim.t >= sim.t_end * (1 - 1e-12)
+                if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
+                    with sim.timers.phase("output"):
+                        writer.write_frame(sim)
+                if len(gauges) and (gsched.due(sim.t) or at_end):
+                    with sim.timers.phase("diagnostics"):
+                        gauges.sample(sim)
+                if samples.due(sim.t) or at_end:
+                    with sim.timers.phase("diagnostics"):
+                        terms = global_terms(sim)
+                        if comm.rank == 0:
+                            rows.append(_row(sim.t, terms, ref))
+                if ckpt.due(at_end):
+                    with sim.timers.phase("output"):
+                        ckpt.write(frames, samples, gsched, gauges, writer, rows, ref)
+                if sim.stop_requested and not at_end:
+                    stopped = True
+                    break
+                now = time.perf_counter()
+                if comm.rank == 0 and not quiet and now - last_log > 2.0:
+                    last_log = now
+                    _progress(sim, now - t0, rows, log, start)
+    except SimulationError:
+        # Raised on every rank together: the incomplete run file is removed
+        writer.close(rows, TERMS, ok=False, gauges=gauges)
+        raise
+    # Any other exception skips the collective close: the command line aborts every rank
+    if stopped:
+        writer.suspend()
+    else:
+        writer.close(rows, TERMS, ok=True, gauges=gauges)
     wall = time.perf_counter() - t0
     report = sim.timers.report(comm)
     summary = {"steps": sim.nstep, "time": sim.t, "wall_s": wall,
-               "balance_error": rows[-1][-1] if rows else None,
-               "phases": report, "effects": sim.effect_names, "ranks": comm.size}
+               "balance_error": rows[-1][-1] if rows else None, "stopped": stopped,
+               "checkpoint": ckpt.path if stopped else None,
+               "phases": report, "effects": sim.effect_names, "ranks": comm.size,
+               "imbalance": sim.timers.imbalance(comm)}
     if comm.rank == 0 and not quiet:
         _report(summary, log)
     return summary
@@ -88,25 +118,43 @@ def _row(t, terms, ref):
     return [t] + [terms[k] for k in TERMS] + [total, err]
 
 
-def _progress(sim, wall, rows, log):
-    frac = sim.t / sim.t_end
+def _progress(sim, wall, rows, log, start):
+    """One progress line; ``start`` = (step, time) where this session began."""
+    step0, t0 = start
+    # Fraction of this session's work done: by time, or by steps under time.max_steps
+    frac = (sim.t - t0) / (sim.t_end - t0) if sim.t_end > t0 else 1.0
+    if sim.max_steps:
+        frac = max(frac, (sim.nstep - step0) / max(sim.max_steps - step0, 1))
     eta = wall * (1 - frac) / frac if frac > 0 else float("nan")
     err = rows[-1][-1] if rows else float("nan")
     line = (f"step {sim.nstep}  t={sim.t:.4e} s  dt={sim.dt:.3e} s  "
-            f"{sim.nstep / wall:.0f} steps/s  ETA {eta:.0f} s  energy err {err:.2e}")
-    if sys.stdout.isatty():
+            f"{(sim.nstep - step0) / wall:.0f} steps/s  ETA {eta:.0f} s  energy err {err:.2e}")
+    if _terminal():
         print("\r" + line, end="", flush=True)
     else:
         log(line)
 
 
 def _report(summary, log):
-    if sys.stdout.isatty():
+    if _terminal():
         print()
-    log(f"done: {summary['steps']} steps to t={summary['time']:.6e} s in "
+    if summary["stopped"]:
+        log(f"stopped by SIGTERM at step {summary['steps']}, t={summary['time']:.6e} s: "
+            f"checkpoint {summary['checkpoint']}; continue with --restart "
+            f"{summary['checkpoint']}")
+    word = "stopped" if summary["stopped"] else "done"
+    log(f"{word}: {summary['steps']} steps to t={summary['time']:.6e} s in "
         f"{summary['wall_s']:.2f} s on {summary['ranks']} rank(s); energy balance error "
         f"{summary['balance_error']:.3e}; effects: {', '.join(summary['effects']) or 'none'}")
+    log(f"load imbalance (max/mean busy time over ranks): {summary['imbalance']:.3f}")
     log("phase                 min [s]    avg [s]    max [s]")
     for p, (lo, avg, hi) in summary["phases"].items():
         if hi > 0:
             log(f"{p:<20} {lo:10.3f} {avg:10.3f} {hi:10.3f}")
+
+
+def _terminal():
+    """A progress line that rewrites itself only on a real terminal: not under mpirun,
+    which hands the ranks a pseudo-terminal and joins the rewritten lines."""
+    return sys.stdout.isatty() and "OMPI_COMM_WORLD_SIZE" not in os.environ \
+        and "PMI_RANK" not in os.environ

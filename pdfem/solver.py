@@ -34,7 +34,7 @@ NO_ETH = np.zeros((0, 3))
 class Simulation:
     """One run of a scene on a communicator: setup, :meth:`step`, :meth:`run`."""
 
-    def __init__(self, scene, comm, init_state=None):
+    def __init__(self, scene, comm, init_state=None, restart=None):
         r = scene.resolved
         self.scene, self.comm, self.resolved = scene, comm, r
         self.timers = Timers()
@@ -63,15 +63,28 @@ class Simulation:
         self.dt_max, self.dt_min, self.max_steps = tm["dt_max"], tm["dt_min"], tm["max_steps"]
         self.layout = build.Layout(scene.grains["center"].shape[0], el["level"],
                                    r.get("blocks", []))
+        self.restarted = restart is not None
+        # Stop and checkpoint requests: local flags, shared by the reduction of next_dt
+        self.stop_requested = self.checkpoint_requested = False
+        self.local_stop = self.local_ckpt = 0.0
         self._build_initial(scene, init_state)
+        self.checkpoint = None
+        if restart is not None:
+            self._build_restart(restart)
         for eff in self.effects:
             eff.setup(self)
         self._fail_msg = ""
-        # Forces at t = 0 and the first half step
         self.t, self.nstep = 0.0, 0
         self.du = np.zeros_like(self.store.v)
         self.f = np.zeros_like(self.store.v)
         self.kin = np.zeros(self.store.nbody)
+        if restart is not None:
+            # Continue exactly where the checkpoint stopped
+            st = self.checkpoint.state
+            self.t, self.nstep, self.dt, self.dt_prev = st["t"], st["nstep"], st["dt"], \
+                st["dt_prev"]
+            return
+        # Forces at t = 0 and the first half step
         self.compute_forces()
         self.dt_prev = 0.0
         self.dt = self.next_dt()
@@ -117,6 +130,35 @@ class Simulation:
             init_state(self, store)
         with self.timers.phase("migration"):
             self.store, self.halo = rebuild(comm, store, self.grid, self.owner, self.nglobal)
+
+    def _build_restart(self, path):
+        """Replace the initial bodies by a checkpoint's: every rank keeps the global bodies
+        and the grains whose centroid cell it owns; the rebuild makes the ghosts."""
+        from pdfem.io.checkpoint import read_checkpoint
+        from pdfem.parallel.exchange import owned_grain_cells
+
+        ck = read_checkpoint(path, self.fields)
+        self.checkpoint = ck
+        _same_scene(path, ck.scene_text, self.scene.to_toml_string())
+        b = ck.batch
+        isg = b.a["isglobal"] == 1
+        # Global bodies once (rank 0's copy), then the grains, both in gid order
+        glob = np.nonzero(isg)[0]
+        grains = np.nonzero(~isg)[0]
+        order = np.concatenate([glob[np.argsort(b.a["gid"][glob], kind="stable")],
+                                grains[np.argsort(b.a["gid"][grains], kind="stable")]])
+        full = Store(self.fields, Batch.concat(self.fields, [b]), b.nbody)
+        full = Store(self.fields, full.take(order), b.nbody)
+        cells = owned_grain_cells(full, self.grid, self.nglobal)
+        weights = np.bincount(cells, minlength=self.grid.ncell).astype(float)
+        self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,
+                               self.grid.ny, self.comm.size)
+        mine = self.nglobal + np.nonzero(self.owner[cells] == self.comm.rank)[0]
+        keep = np.concatenate([np.arange(self.nglobal), mine])
+        store = Store(self.fields, full.take(keep), keep.shape[0])
+        with self.timers.phase("migration"):
+            self.store, self.halo = rebuild(self.comm, store, self.grid, self.owner,
+                                            self.nglobal)
 
     def _bed_stress(self, batch, g, mine, e0):
         """Stresses and material state of a prepared bed's grains (elements after e0)."""
@@ -210,8 +252,12 @@ class Simulation:
                 limiter = limiter.dt_limiter(self, dt_loc)
             self.fail(f"stable dt {dt_loc:.3e} s (limited by {limiter}) is below time.dt_min "
                       f"{self.dt_min:.3e} s")
-        red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0])
+        red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0, self.local_stop,
+                        self.local_ckpt])
         self.comm.Allreduce(MPI.IN_PLACE, red, op=MPI.MAX)
+        self.stop_requested = self.stop_requested or red[2] > 0
+        self.checkpoint_requested = self.checkpoint_requested or red[3] > 0
+        self.local_ckpt = 0.0
         if red[1] > 0:
             msgs = [m for m in self.comm.allgather(self._fail_msg) if m]
             raise SimulationError(f"step {self.nstep}, t={self.t:.6e} s: {msgs[0]}")
@@ -231,3 +277,19 @@ class Simulation:
         with self.timers.phase("integration"):
             advance_velocities(s.v, self.f, s.m, s.bcf, s.bcv, self.gamma, dt_avg, s.nn_own,
                                s.node_body, s.acc, self.kin[: s.nb_own], first)
+
+
+def _same_scene(path, saved, given):
+    """A restart must run the checkpoint's scene; only [output] and time.end may change."""
+    import tomllib
+
+    a, b = tomllib.loads(saved), tomllib.loads(given)
+    for d in (a, b):
+        d.pop("output", None)
+        d.get("time", {}).pop("end", None)
+    if a == b:
+        return
+    for key in sorted(set(a) | set(b)):
+        if a.get(key) != b.get(key):
+            raise InputError(f"--restart: {path} was written for a different scene ([{key}] "
+                             "differs; only [output] and time.end may change)")

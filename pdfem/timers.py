@@ -32,3 +32,9 @@ class Timers:
         allv = np.array(comm.allgather(local))
         return {p: (allv[:, i].min(), allv[:, i].mean(), allv[:, i].max())
                 for i, p in enumerate(PHASES)}
+
+    def imbalance(self, comm):
+        """Max over mean of the ranks' busy time (every phase but output): 1 is perfect."""
+        busy = sum(v for k, v in self.seconds.items() if k != "output")
+        allv = np.array(comm.allgather(busy))
+        return float(allv.max() / allv.mean()) if allv.mean() > 0 else 1.0

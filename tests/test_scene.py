@@ -98,7 +98,8 @@ def test_minimal_scene_defaults(tmp_path, monkeypatch):
     assert r["domain"]["partition"] == "rcb" and r["domain"]["rebalance"] == 0.0
     assert r["output"] == {"path": "pdfem-run.h5", "interval": 1e-5 / 20,
                            "fields": ["x", "v", "stress"], "energy_interval": 1e-5 / 20 / 10,
-                           "gauge_interval": 1e-5 / 20 / 10 / 10}
+                           "gauge_interval": 1e-5 / 20 / 10 / 10, "checkpoint_interval": 0.0,
+                           "checkpoint_wall": 3600.0}
     assert r["run"] == {"seed": 0}
     assert r["blocks"] == [] and r["bc"] == []
     # Effects exist only when their tables do

@@ -70,8 +70,9 @@ def front_positions(time, grain_y, grain_vy, grain_mass, hammer_y, hammer_vy, an
     A layer (thickness ``layer``, stacked down from the current hammer face) is shocked when
     its grains' mass-weighted downward velocity exceeds ``fraction`` times the hammer face's
     downward speed; the front is the threshold crossing below the lowest shocked layer
-    contiguous with the hammer. Before impact (or with the hammer not moving down) y_f is the
-    bed top.
+    contiguous with the hammer. Before impact y_f is the bed top. The front is a first
+    arrival: it never moves back up (a decelerating or rebounding hammer leaves it where the
+    disturbance got to), so y_f is the running minimum of the per-frame detections.
     """
     nf = len(time)
     t_imp = impact_time(time, hammer_y, y_top0)
@@ -83,6 +84,8 @@ def front_positions(time, grain_y, grain_vy, grain_mass, hammer_y, hammer_vy, an
         top = min(hammer_y[k], y_top0)
         yf[k] = min(_front_one(grain_y[k], -grain_vy[k], grain_mass, hammer_y[k], anvil_y[k],
                                fraction * speed, layer), top)
+    # First arrival: the front only moves down
+    yf = np.minimum.accumulate(yf)
     shocked = (grain_y > yf[:, None]) & (grain_y < hammer_y[:, None])
     return {"y_f": yf, "depth": y_top0 - yf, "shocked": shocked, "t_impact": t_imp}
 
@@ -220,3 +223,25 @@ def hugoniot(time, hammer_y, anvil_y, H0, gauge_time, hammer_comp, anvil_comp, r
     with np.errstate(divide="ignore"):
         dens = rho0 / (1.0 - ev)
     return {"ev": ev, "stress": stress, "density": dens}
+
+
+def bed_stress(run, frames, shocked, y_f):
+    """Compressive stress -sigma_yy behind the front, read in the bed itself: the integral of
+    the shocked grains' stress over their area divided by the area between the front and the
+    hammer face (the pores carry none), averaged over ``frames``. NaN without frames or
+    stresses."""
+    from pdfem.analysis.runfile import element_areas
+
+    vals = []
+    grain_elem = run.elem_body < run.ng
+    for k in frames:
+        x, comp, _ = run.frame(int(k))
+        if comp is None:
+            return NAN
+        sel = grain_elem.copy()
+        sel[grain_elem] = shocked[k][run.elem_body[grain_elem]]
+        area = element_areas(x, run.conn)[sel]
+        region = run.width * (run.hammer_y[k] - y_f[k])
+        if area.sum() > 0 and region > 0:
+            vals.append(float((area * comp[sel]).sum() / region))
+    return float(np.mean(vals)) if vals else NAN

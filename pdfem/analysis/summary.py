@@ -67,6 +67,9 @@ def compute(run):
     sig_dec = fr.deceleration_stress(t, run.hammer_mean_vy, run.hammer_mass, run.width,
                                      fit["frames"])
     jc_dec = fr.jump_closures(rho0, rho1, fit["us"], up, sig_dec)
+    # The stress behind the front read in the shocked grains themselves
+    sig_bed = fr.bed_stress(run, fit["frames"], fp["shocked"], fp["y_f"])
+    jc_bed = fr.jump_closures(rho0, rho1, fit["us"], up, sig_bed)
     snow = fr.snowplow(up, rho0, rho_s)
     hug = fr.hugoniot(t, run.hammer_y, run.anvil_y, H0, run.gauge_time, hcomp, acomp, rho0)
     # The 1997 report's numbers against the snowplow bound at its own density
@@ -88,9 +91,11 @@ def compute(run):
                   "arrival_gauge": arr_gauge},
         "shocked": {"up": up, "hammer_speed": st["hammer_speed"], "rho1": rho1,
                     "sigma": sigma, "sigma_hammer_deceleration": sig_dec,
+                    "sigma_bed": sig_bed,
                     "rho0_us_up": rho0 * fit["us"] * up},
         "jump": {"mass_closure": jc["mass"], "momentum_closure": jc["momentum"],
-                 "momentum_closure_deceleration": jc_dec["momentum"]},
+                 "momentum_closure_deceleration": jc_dec["momentum"],
+                 "momentum_closure_bed": jc_bed["momentum"]},
         "snowplow": {"us": snow["us"], "sigma": snow["sigma"], "rho1": snow["rho1"]},
         "gauges": {"hammer_peak": float(np.max(hcomp)) if hcomp.size else NAN,
                    "anvil_peak": float(np.max(acomp)) if acomp.size else NAN},
@@ -154,10 +159,12 @@ def report_text(s):
         f"rho1 = {_f(h['rho1'])} kg/m3",
         f"hammer gauge stress over the window sigma = {_f(h['sigma'], 1e-6)} MPa; "
         f"rho0 Us up = {_f(h['rho0_us_up'], 1e-6)} MPa; from the hammer's deceleration "
-        f"{_f(h['sigma_hammer_deceleration'], 1e-6)} MPa",
-        f"jump closures: mass {_f(s['jump']['mass_closure'], 100)} %, momentum "
-        f"{_f(s['jump']['momentum_closure'], 100)} % (with the deceleration stress "
-        f"{_f(s['jump']['momentum_closure_deceleration'], 100)} %)",
+        f"{_f(h['sigma_hammer_deceleration'], 1e-6)} MPa; behind the front (bed) "
+        f"{_f(h['sigma_bed'], 1e-6)} MPa",
+        f"jump closures: mass {_f(s['jump']['mass_closure'], 100)} %, momentum with the stress "
+        f"behind the front {_f(s['jump']['momentum_closure_bed'], 100)} %, with the "
+        f"hammer's deceleration {_f(s['jump']['momentum_closure_deceleration'], 100)} %, with "
+        f"the hammer gauge {_f(s['jump']['momentum_closure'], 100)} %",
         f"snowplow at the measured up: Us = {_f(s['snowplow']['us'])} m/s, sigma = "
         f"{_f(s['snowplow']['sigma'], 1e-6)} MPa, rho1 = rho_s",
         f"peak gauge stresses: hammer {_f(s['gauges']['hammer_peak'], 1e-6)} MPa, anvil "

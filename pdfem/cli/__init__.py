@@ -48,6 +48,27 @@ def main(argv=None):
         mod = importlib.import_module(f"pdfem.cli.{args.command}")
         return mod.run(args) or 0
     except (InputError, SimulationError) as exc:
+        # Raised on every rank together (input checks and step guards are collective)
         if _rank() == 0:
             print(f"pdfem: error: {exc}", file=sys.stderr, flush=True)
         return exc.exit_status
+    except Exception as exc:
+        _abort(exc)
+        raise
+
+
+def _abort(exc):
+    """An unexpected exception on one rank: print it and abort every rank (no hang)."""
+    import traceback
+
+    traceback.print_exc(file=sys.stderr)
+    rank = _rank()
+    print(f"pdfem: internal error on rank {rank}: {type(exc).__name__}: {exc}",
+          file=sys.stderr, flush=True)
+    try:
+        from mpi4py import MPI
+
+        if MPI.COMM_WORLD.size > 1:
+            MPI.COMM_WORLD.Abort(1)
+    except ImportError:
+        pass

@@ -20,6 +20,8 @@ def add_parser(sub):
     p.add_argument("-o", "--output", default=None, help="run file (overrides output.path)")
     p.add_argument("--force", action="store_true", help="overwrite an existing run file")
     p.add_argument("--quiet", action="store_true", help="no progress or report")
+    p.add_argument("--restart", default=None, metavar="CHECKPOINT", help="continue from a "
+                   "checkpoint (<run file>.ckpt.h5) of this scene, on any number of ranks")
 
 
 def check_output_path(path, force, key="output.path"):
@@ -45,9 +47,11 @@ def run(args):
     check_output_path(out, args.force)
     if comm.rank == 0 and not args.quiet:
         print(f"pdfem: {scene.path} on {comm.size} rank(s) -> {out}", flush=True)
-    sim = Simulation(scene, comm)
+    if args.restart and not os.path.isfile(args.restart):
+        raise InputError(f"--restart: {args.restart}: no such checkpoint file")
+    sim = Simulation(scene, comm, restart=args.restart)
     summary = drive(sim, out, quiet=args.quiet)
-    if "shock" in scene.resolved:
+    if "shock" in scene.resolved and not summary["stopped"]:
         shock_report(out, summary, comm, args.quiet)
     return 0
 

@@ -66,17 +66,20 @@ def run(args):
         if comm.rank == 0:
             s = analyse(out, os.path.splitext(out)[0])
             points.append({"velocity": v, "us": s["front"]["us"], "up": s["shocked"]["up"],
-                           "sigma": s["shocked"]["sigma"], "rho0": s["bed"]["rho0"],
+                           "sigma": s["shocked"]["sigma_hammer_deceleration"],
+                           "sigma_bed": s["shocked"]["sigma_bed"],
+                           "sigma_gauge": s["shocked"]["sigma"], "rho0": s["bed"]["rho0"],
                            "rho1": s["shocked"]["rho1"],
                            "solid_density": s["bed"]["solid_density"],
                            "snowplow_us": s["snowplow"]["us"],
                            "snowplow_sigma": s["snowplow"]["sigma"],
                            "mass_closure": s["jump"]["mass_closure"],
-                           "momentum_closure": s["jump"]["momentum_closure"],
+                           "momentum_closure": s["jump"]["momentum_closure_deceleration"],
                            "balance_error": summary["balance_error"], "wall_s": summary["wall_s"]})
             p = points[-1]
-            print(f"  Us {_f(p['us'])} m/s, up {_f(p['up'])} m/s, stress "
-                  f"{_f(p['sigma'], 1e-6)} MPa; snowplow Us {_f(p['snowplow_us'])} m/s", flush=True)
+            print(f"  Us {_f(p['us'])} m/s, up {_f(p['up'])} m/s, stress (hammer deceleration) "
+                  f"{_f(p['sigma'], 1e-6)} MPa, behind the front {_f(p['sigma_bed'], 1e-6)} MPa; "
+                  f"snowplow Us {_f(p['snowplow_us'])} m/s", flush=True)
     if comm.rank == 0:
         from pdfem.analysis.summary import _plain
 

@@ -89,13 +89,14 @@ class Heat(Effect):
         sim.heat = self
         fill_column(sim, CP, "specific_heat")
         sim.mat_params[:, T_REF] = self.t_init
-        s.T[:] = self.t_init
-        if self.couple_elements:
-            s.tprev[:] = self.t_init
-        # Lumped capacity: the lumped mass with rho c in place of rho
-        cap_table = sim.mat_params.copy()
-        cap_table[:, RHO] = sim.mat_params[:, RHO] * sim.mat_params[:, CP]
-        q4_lumped_mass(s.x, s.conn, s.emat, cap_table, 0, s.nelem, s.tcap)
+        if not sim.restarted:
+            # Initial temperatures; lumped capacity: the lumped mass with rho c in place of rho
+            s.T[:] = self.t_init
+            if self.couple_elements:
+                s.tprev[:] = self.t_init
+            cap_table = sim.mat_params.copy()
+            cap_table[:, RHO] = sim.mat_params[:, RHO] * sim.mat_params[:, CP]
+            q4_lumped_mass(s.x, s.conn, s.emat, cap_table, 0, s.nelem, s.tcap)
         self._hold_blocks(sim)
         self.src = np.zeros(s.nnode)
         self.q = np.zeros(s.nnode)

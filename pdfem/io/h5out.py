@@ -15,6 +15,7 @@ import os
 
 import h5py
 import numpy as np
+from mpi4py import MPI
 
 from pdfem import __version__
 from pdfem.io.gather import to_blocks
@@ -24,18 +25,19 @@ from pdfem.store import ranges
 class RunWriter:
     """Collective writer of frames and the energy series of one run."""
 
-    def __init__(self, path, sim, nframes, fields=("x", "v", "stress")):
+    def __init__(self, path, sim, nframes, fields=("x", "v", "stress"), resume=None):
         comm = sim.comm
         self.comm, self.path, self.fields = comm, path, tuple(fields)
         self.tmp = path + ".part"
+        self.nframes_max = nframes
+        self.resumed = False
+        if resume is not None and self._reopen(sim, resume):
+            return
         self.f = h5py.File(self.tmp, "w", driver="mpio", comm=comm)
         layout = sim.layout
         self.nn_tot, self.ne_tot = layout.nnode, layout.nelem
         f = self.f
-        f.attrs["scene"] = sim.scene.to_toml_string()
-        f.attrs["effects"] = ",".join(sim.effect_names)
-        f.attrs["pdfem_version"] = __version__
-        f.attrs["nranks"] = comm.size
+        self._attrs(sim)
         # Static mesh description (written by rank 0: it is known to every rank)
         mesh = f.create_group("mesh")
         dsets = {
@@ -50,7 +52,6 @@ class RunWriter:
         shapes = {"x": (self.nn_tot, 2), "v": (self.nn_tot, 2),
                   "stress": (self.ne_tot, sim.nip, 4), "temperature": (self.nn_tot,)}
         # Parallel HDF5 allocates chunked datasets at once: start small, grow by doubling
-        self.nframes_max = nframes
         cap = min(nframes, 8)
         self.time = fr.create_dataset("time", (cap,), "f8", maxshape=(None,))
         self.dsets = {}
@@ -61,6 +62,38 @@ class RunWriter:
                                                  chunks=(1,) + tuple(max(1, n) for n in shp))
         self.nframe = 0
         self._write_mesh(sim, dsets)
+
+    def _attrs(self, sim):
+        f = self.f
+        f.attrs["scene"] = sim.scene.to_toml_string()
+        f.attrs["effects"] = ",".join(sim.effect_names)
+        f.attrs["pdfem_version"] = __version__
+        f.attrs["nranks"] = self.comm.size
+
+    def _reopen(self, sim, nframe):
+        """Continue ``<path>.part`` after a restart: keep its first ``nframe`` frames.
+
+        Returns False (the caller starts a new file) when the file is missing or unreadable,
+        e.g. torn by a process killed in the middle of a write.
+        """
+        ok = os.path.exists(self.tmp)
+        if ok:
+            try:
+                f = h5py.File(self.tmp, "r+", driver="mpio", comm=self.comm)
+            except OSError:
+                ok = False
+        ok = self.comm.allreduce(int(ok), op=MPI.MIN) == 1
+        if not ok:
+            return False
+        self.f = f
+        self.nn_tot, self.ne_tot = sim.layout.nnode, sim.layout.nelem
+        fr = f["frames"]
+        self.time = fr["time"]
+        self.dsets = {name: fr[name] for name in self.fields}
+        self.nframe = int(nframe)
+        self._attrs(sim)
+        self.resumed = True
+        return True
 
     def _rows(self, sim):
         """Global node and element indices of this rank's rows (globals on rank 0 only)."""
@@ -111,9 +144,15 @@ class RunWriter:
             d = self.dsets[name]
             if hi > lo:
                 d[k, lo:hi] = blk.reshape((hi - lo,) + d.shape[2:])
-        if self.comm.rank == 0:
-            self.time[k] = sim.t
+        # Every rank writes the (same) time: a write by one rank alone can allocate a chunk
+        # of a reopened file on that rank only, and the collective close then hangs
+        self.time[k] = sim.t
         self.nframe += 1
+
+    def suspend(self):
+        """Flush and close without finishing: a restart continues this ``.part`` file."""
+        self.f.close()
+        self.comm.Barrier()
 
     def close(self, energy_rows, terms, ok=True, gauges=None):
         """Write the energy series and gauges (rank 0 holds them), close, rename into place."""

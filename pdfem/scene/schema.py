@@ -353,6 +353,10 @@ OUTPUT = {
                             "samples", "s"),
     "gauge_interval": _pos("float", Derived("energy_interval / 10"), "time between gauge "
                            "samples", "s"),
+    "checkpoint_interval": _nonneg("float", 0.0, "simulated time between checkpoints "
+                                   "(<path>.ckpt.h5); 0 = none (SIGTERM still writes one)", "s"),
+    "checkpoint_wall": _nonneg("float", 3600.0, "wall-clock time between checkpoints; 0 = "
+                               "none", "s"),
 }
 
 # [run]

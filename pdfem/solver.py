@@ -63,6 +63,7 @@ class Simulation:
         self.dt_max, self.dt_min, self.max_steps = tm["dt_max"], tm["dt_min"], tm["max_steps"]
         self.layout = build.Layout(scene.grains["center"].shape[0], el["level"],
                                    r.get("blocks", []))
+        self.keep_contact_force = "contact_force" in r["output"]["fields"]
         self.restarted = restart is not None
         # Stop and checkpoint requests: local flags, shared by the reduction of next_dt
         self.stop_requested = self.checkpoint_requested = False
@@ -78,6 +79,7 @@ class Simulation:
         self.du = np.zeros_like(self.store.v)
         self.f = np.zeros_like(self.store.v)
         self.kin = np.zeros(self.store.nbody)
+        self.fc = np.zeros_like(self.store.v)
         if restart is not None:
             # Continue exactly where the checkpoint stopped
             st = self.checkpoint.state
@@ -231,9 +233,13 @@ class Simulation:
         if bad >= 0:
             self.fail(f"element {s.elem_loc[bad]} of body {s.elem_gid[bad]} is inverted or "
                       "its material update failed")
+        f0 = self.f.copy() if self.keep_contact_force else None
         for eff in self.effects:
             if hasattr(eff, "contact_forces"):
                 eff.contact_forces(self)
+        if f0 is not None:
+            # The contacts' share of the nodal force, for output
+            self.fc = self.f - f0
         for eff in self.effects:
             eff.body_force(self)
 

@@ -12,7 +12,7 @@ import sys
 
 from pdfem.errors import InputError, SimulationError
 
-COMMANDS = ("run", "prepare", "sweep", "analyse", "material", "bench")
+COMMANDS = ("run", "prepare", "sweep", "analyse", "export", "material", "bench")
 
 
 class _Parser(argparse.ArgumentParser):

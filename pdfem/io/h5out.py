@@ -19,7 +19,37 @@ from mpi4py import MPI
 
 from pdfem import __version__
 from pdfem.io.gather import to_blocks
+from pdfem.io.xdmf import write_xdmf
 from pdfem.store import ranges
+
+
+def frame_fields(resolved, nip, fields):
+    """The frame datasets of a run: the scene's output.fields, plus ``stress_cell`` (the
+    element mean) when elements have several integration points."""
+    out = list(fields)
+    if "stress" in out and nip > 1:
+        out.insert(out.index("stress") + 1, "stress_cell")
+    return out
+
+
+def field_table(sim):
+    """{name: (node|elem, trailing shape, values(nidx, eidx))} of every frame field."""
+    s = sim.store
+
+    def emean(a, e):
+        return a[e].mean(axis=1)
+
+    return {
+        "x": ("node", (2,), lambda n, e: s.x[n]),
+        "v": ("node", (2,), lambda n, e: s.v[n]),
+        "temperature": ("node", (), lambda n, e: s.T[n]),
+        "contact_force": ("node", (2,), lambda n, e: sim.fc[n]),
+        "stress": ("elem", (sim.nip, 4), lambda n, e: s.sig[e]),
+        "stress_cell": ("elem", (4,), lambda n, e: emean(s.sig, e)),
+        "kappa": ("elem", (), lambda n, e: s.mst[e, :, 0].mean(axis=1)),
+        "plastic_strain": ("elem", (4,), lambda n, e: s.mst[e, :, 2:6].mean(axis=1)),
+        "element_temperature": ("elem", (), lambda n, e: s.T[s.conn[e]].mean(axis=1)),
+    }
 
 
 class RunWriter:
@@ -27,7 +57,8 @@ class RunWriter:
 
     def __init__(self, path, sim, nframes, fields=("x", "v", "stress"), resume=None):
         comm = sim.comm
-        self.comm, self.path, self.fields = comm, path, tuple(fields)
+        self.comm, self.path = comm, path
+        self.fields = tuple(frame_fields(sim.resolved, sim.nip, fields))
         self.tmp = path + ".part"
         self.nframes_max = nframes
         self.resumed = False
@@ -49,8 +80,9 @@ class RunWriter:
         }
         fr = f.create_group("frames")
         # Frame datasets hold at most nframes; they are cut to the frames written at close
-        shapes = {"x": (self.nn_tot, 2), "v": (self.nn_tot, 2),
-                  "stress": (self.ne_tot, sim.nip, 4), "temperature": (self.nn_tot,)}
+        table = field_table(sim)
+        shapes = {name: ((self.nn_tot,) if kind == "node" else (self.ne_tot,)) + shp
+                  for name, (kind, shp, _) in table.items()}
         # Parallel HDF5 allocates chunked datasets at once: start small, grow by doubling
         cap = min(nframes, 8)
         self.time = fr.create_dataset("time", (cap,), "f8", maxshape=(None,))
@@ -125,7 +157,6 @@ class RunWriter:
 
     def write_frame(self, sim):
         """Write the frame fields of every body at the current time (collective)."""
-        s = sim.store
         nidx, eidx, gn, ge = self._rows(sim)
         k = self.nframe
         if k >= self.time.shape[0]:
@@ -135,12 +166,11 @@ class RunWriter:
             for d in self.dsets.values():
                 d.resize((cap,) + d.shape[1:])
         # (global rows, local values) of each field, by name
-        source = {"x": (gn, lambda: s.x[nidx]), "v": (gn, lambda: s.v[nidx]),
-                  "stress": (ge, lambda: s.sig[eidx]), "temperature": (gn, lambda: s.T[nidx])}
+        table = field_table(sim)
         for name in self.dsets:
-            idx, rows = source[name]
-            n = self.nn_tot if idx is gn else self.ne_tot
-            lo, hi, blk = to_blocks(self.comm, idx, rows(), n)
+            kind, _, values = table[name]
+            idx, n = (gn, self.nn_tot) if kind == "node" else (ge, self.ne_tot)
+            lo, hi, blk = to_blocks(self.comm, idx, values(nidx, eidx), n)
             d = self.dsets[name]
             if hi > lo:
                 d[k, lo:hi] = blk.reshape((hi - lo,) + d.shape[2:])
@@ -175,6 +205,7 @@ class RunWriter:
         if comm.rank == 0:
             if ok:
                 os.replace(self.tmp, self.path)
+                write_xdmf(self.path)
             else:
                 os.remove(self.tmp)
         comm.Barrier()

@@ -99,7 +99,8 @@ class Section:
 # Names of materials and blocks
 NAME_PATTERN = r"[A-Za-z_][A-Za-z0-9_-]*"
 SIDES = ("left", "right", "bottom", "top")
-OUTPUT_FIELDS = ("x", "v", "stress", "temperature")
+OUTPUT_FIELDS = ("x", "v", "stress", "temperature", "kappa", "plastic_strain",
+                 "element_temperature", "contact_force")
 
 # [domain]
 DOMAIN = {
@@ -346,9 +347,13 @@ OUTPUT = {
     "path": Key("str", "pdfem-run.h5", "output HDF5 file, relative to the current directory; "
                 "its directory must exist and be writable"),
     "interval": _pos("float", Derived("time.end / 20"), "time between output frames", "s"),
-    "fields": Key("strlist", Derived('["x", "v", "stress"], and "temperature" with [heat]'),
-                  "node/element fields written per frame (temperature needs [heat])",
-                  choices=OUTPUT_FIELDS),
+    "fields": Key("strlist", Derived('["x", "v", "stress"]; "kappa", "plastic_strain" with a '
+                                     'cap material; "temperature", "element_temperature" with '
+                                     '[heat]'),
+                  "node fields (x, v, temperature, contact_force) and element fields (stress "
+                  "per integration point; element means of kappa, plastic_strain (xx, yy, xy, "
+                  "zz), element_temperature) written per frame; contact_force = the nodal "
+                  "force of the contacts (needs [contact])", choices=OUTPUT_FIELDS),
     "energy_interval": _pos("float", Derived("interval / 10"), "time between energy-balance "
                             "samples", "s"),
     "gauge_interval": _pos("float", Derived("energy_interval / 10"), "time between gauge "

@@ -73,7 +73,9 @@ def resolve(doc, base_dir):
         r["thermal_bc"] = [check_table(b, S.THERMAL_BC, f"thermal_bc[{i}]") for i, b in
                            enumerate(array_of_tables(doc["thermal_bc"], "thermal_bc"))]
     _heat_rules(r)
-    r["output"] = _output(doc.get("output", {}), r["time"]["end"], "heat" in r)
+    r["output"] = _output(doc.get("output", {}), r["time"]["end"], "heat" in r,
+                          any(m["model"] == "cap" for m in r["materials"].values()),
+                          "contact" in r)
     r["gauges"] = _gauges(doc.get("gauges", []), r["blocks"])
     if "shock" in doc:
         r["shock"] = _shock(doc["shock"], r)
@@ -274,13 +276,19 @@ def _heat_rules(r):
                                  f"(blocks: {', '.join(names) or 'none'})")
 
 
-def _output(value, t_end, heat):
+def _output(value, t_end, heat, cap=False, contact=False):
     """[output]: derived intervals and fields; the output directory must be writable."""
     o = check_table(value, S.OUTPUT, "output")
     if "fields" not in o:
-        o["fields"] = ["x", "v", "stress"] + (["temperature"] if heat else [])
-    elif "temperature" in o["fields"] and not heat:
-        raise SceneError("output.fields", '"temperature" needs the [heat] table')
+        o["fields"] = (["x", "v", "stress"] + (["kappa", "plastic_strain"] if cap else [])
+                       + (["temperature", "element_temperature"] if heat else []))
+    for name, ok, need in (("temperature", heat, "the [heat] table"),
+                           ("element_temperature", heat, "the [heat] table"),
+                           ("kappa", cap, "a cap material"),
+                           ("plastic_strain", cap, "a cap material"),
+                           ("contact_force", contact, "the [contact] table")):
+        if name in o["fields"] and not ok:
+            raise SceneError("output.fields", f'"{name}" needs {need}')
     o.setdefault("interval", t_end / 20.0)
     o.setdefault("energy_interval", o["interval"] / 10.0)
     o.setdefault("gauge_interval", o["energy_interval"] / 10.0)

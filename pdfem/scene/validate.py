@@ -183,9 +183,7 @@ def _bcs(value, block_names):
         if ("body" in bc) == ("wall" in bc):
             raise SceneError(p, "give exactly one of body (a block name) or wall (a side)")
         if "body" in bc:
-            if bc["body"] not in block_names:
-                raise SceneError(f"{p}.body", f"unknown block {show(bc['body'])} (known: "
-                                 f"{', '.join(block_names) or 'no blocks'})")
+            _known_block(bc["body"], block_names, f"{p}.body")
             bc.setdefault("nodes", "all")
             side = bc["nodes"]
         elif "nodes" in bc:
@@ -271,9 +269,7 @@ def _heat_rules(r):
             raise SceneError("thermal_bc", "needs the [heat] table (the temperature field)")
         names = [b["name"] for b in r["blocks"]]
         for i, bc in enumerate(r["thermal_bc"]):
-            if bc["body"] not in names:
-                raise SceneError(f"thermal_bc[{i}].body", f"unknown block {show(bc['body'])} "
-                                 f"(blocks: {', '.join(names) or 'none'})")
+            _known_block(bc["body"], names, f"thermal_bc[{i}].body")
 
 
 def _output(value, t_end, heat, cap=False, contact=False):
@@ -301,6 +297,13 @@ def _output(value, t_end, heat, cap=False, contact=False):
     return {k: o[k] for k in S.OUTPUT}
 
 
+def _known_block(name, names, path):
+    """SceneError at ``path`` unless ``name`` is one of the block ``names``."""
+    if name not in names:
+        raise SceneError(path, f"unknown block {show(name)} (known: "
+                         f"{', '.join(names) or 'no blocks'})")
+
+
 def _gauges(value, blocks):
     """[[gauges]]: unique names; a block (whole, one side or one element) or a point."""
     out, names = [], [b["name"] for b in blocks]
@@ -315,9 +318,7 @@ def _gauges(value, blocks):
         if ("body" in gauge) == ("point" in gauge):
             raise SceneError(p, "give exactly one of body (a block name) or point")
         if "body" in gauge:
-            if gauge["body"] not in names:
-                raise SceneError(f"{p}.body", f"unknown block {show(gauge['body'])} (known: "
-                                 f"{', '.join(names) or 'no blocks'})")
+            _known_block(gauge["body"], names, f"{p}.body")
             if "side" in gauge and "element" in gauge:
                 raise SceneError(p, "give at most one of side and element")
             blk = blocks[names.index(gauge["body"])]
@@ -340,9 +341,7 @@ def _shock(value, r):
     sh = check_table(value, S.SHOCK, "shock")
     names = [b["name"] for b in r["blocks"]]
     for key in ("hammer", "anvil"):
-        if sh[key] not in names:
-            raise SceneError(f"shock.{key}", f"unknown block {show(sh[key])} (known: "
-                             f"{', '.join(names) or 'no blocks'})")
+        _known_block(sh[key], names, f"shock.{key}")
     gauges = [g["name"] for g in r["gauges"]]
     for key in ("hammer_gauge", "anvil_gauge"):
         if sh[key] not in gauges:
@@ -368,9 +367,7 @@ def _prepare(value, r, mat_ids):
         raise SceneError("prepare.material", f"unknown material {show(pr['material'])} "
                          f"(known: {', '.join(mat_ids)})")
     names = [b["name"] for b in r["blocks"]]
-    if pr["weight"] not in names:
-        raise SceneError("prepare.weight", f"unknown block {show(pr['weight'])} (known: "
-                         f"{', '.join(names) or 'no blocks'})")
+    _known_block(pr["weight"], names, "prepare.weight")
     return {k: pr[k] for k in S.PREPARE}
 
 

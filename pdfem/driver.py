@@ -107,7 +107,7 @@ def run(sim, out_path, quiet=False, log=print):
                "balance_error": rows[-1][-1] if rows else None, "stopped": stopped,
                "checkpoint": ckpt.path if stopped else None,
                "phases": report, "effects": sim.effect_names, "ranks": comm.size,
-               "imbalance": sim.timers.imbalance(comm)}
+               "imbalance": sim.timers.imbalance(comm), "rebalances": sim.rebalances}
     if comm.rank == 0 and not quiet:
         _report(summary, log)
     return summary
@@ -146,7 +146,8 @@ def _report(summary, log):
     log(f"{word}: {summary['steps']} steps to t={summary['time']:.6e} s in "
         f"{summary['wall_s']:.2f} s on {summary['ranks']} rank(s); energy balance error "
         f"{summary['balance_error']:.3e}; effects: {', '.join(summary['effects']) or 'none'}")
-    log(f"load imbalance (max/mean busy time over ranks): {summary['imbalance']:.3f}")
+    log(f"load imbalance (max/mean busy time over ranks): {summary['imbalance']:.3f}; "
+        f"rebalanced {summary['rebalances']} time(s)")
     log("phase                 min [s]    avg [s]    max [s]")
     for p, (lo, avg, hi) in summary["phases"].items():
         if hi > 0:

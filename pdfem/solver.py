@@ -14,7 +14,7 @@
 import numpy as np
 from mpi4py import MPI
 
-from partition import CellGrid, partition
+from partition import CellGrid, needs_rebalance, partition
 from pdfem import build
 from pdfem.effects import active_effects
 from pdfem.effects.contact import check_contact_scene
@@ -23,7 +23,7 @@ from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
 from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.stable import q4_stable_dt
-from pdfem.parallel.exchange import rebuild
+from pdfem.parallel.exchange import owned_grain_cells, rebuild
 from pdfem.store import Batch, Store, core_fields
 from pdfem.timers import Timers
 
@@ -64,6 +64,7 @@ class Simulation:
         self.layout = build.Layout(scene.grains["center"].shape[0], el["level"],
                                    r.get("blocks", []))
         self.keep_contact_force = "contact_force" in r["output"]["fields"]
+        self.rebalances = 0
         self.restarted = restart is not None
         # Stop and checkpoint requests: local flags, shared by the reduction of next_dt
         self.stop_requested = self.checkpoint_requested = False
@@ -137,7 +138,6 @@ class Simulation:
         """Replace the initial bodies by a checkpoint's: every rank keeps the global bodies
         and the grains whose centroid cell it owns; the rebuild makes the ghosts."""
         from pdfem.io.checkpoint import read_checkpoint
-        from pdfem.parallel.exchange import owned_grain_cells
 
         ck = read_checkpoint(path, self.fields)
         self.checkpoint = ck
@@ -207,6 +207,7 @@ class Simulation:
         flag = self.comm.allreduce(int(moved), op=MPI.MAX)
         if flag:
             with self.timers.phase("migration"):
+                self._rebalance()
                 self.store, self.halo = rebuild(self.comm, s, self.grid, self.owner,
                                                 self.nglobal)
             s = self.store
@@ -219,6 +220,24 @@ class Simulation:
                 self.halo.refresh([getattr(s, n) for n in self.halo_fields])
         # Step increments of ghosts are derived exactly as their owners computed them
         self.du = self.dt * s.v
+
+    def _rebalance(self):
+        """At a rebuild: new cell owners when the element-count load of the ranks is more
+        than domain.rebalance times its mean. Every rank computes the same exact integer
+        weights, so all agree; results do not depend on ownership (bit-identical)."""
+        threshold = self.resolved["domain"]["rebalance"]
+        if threshold <= 0.0 or self.comm.size == 1:
+            return
+        s = self.store
+        own = np.arange(self.nglobal, s.nb_own)
+        cells = owned_grain_cells(s, self.grid, self.nglobal)
+        w = np.bincount(cells, weights=s.ne[own], minlength=self.grid.ncell).astype(np.int64)
+        self.comm.Allreduce(MPI.IN_PLACE, w, op=MPI.SUM)
+        weights = w.astype(float)
+        if needs_rebalance(weights, self.owner, self.comm.size, threshold):
+            self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,
+                                   self.grid.ny, self.comm.size)
+            self.rebalances += 1
 
     def compute_forces(self):
         """Residual force f = P - I on owned nodes: elements, contact, body forces."""

@@ -183,3 +183,16 @@ def test_checkpoint_reader_names_a_bad_file(tmp_path):
         f.attrs["format"] = 99
     with pytest.raises(InputError, match="not a pdfem checkpoint"):
         read_checkpoint(str(bad), [])
+
+
+def test_rebalancing_moves_cells_and_keeps_results_bit_identical(tmp_path, reference):
+    # The reference bed falls onto the floor: the rcb cut made for the loose rows at t = 0
+    # leaves the ranks unequal once it has settled
+    text = (tmp_path / _bed(tmp_path, 4000)).read_text().replace(
+        'partition = "rcb"', 'partition = "rcb"\nrebalance = 1.05')
+    (tmp_path / "rb.toml").write_text(text)
+    p = pdfem(["run", "rb.toml", "-o", "rb.h5"], tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    moved = [ln for ln in p.stdout.splitlines() if "rebalanced" in ln]
+    assert moved and int(moved[0].split("rebalanced ")[1].split()[0]) >= 1, p.stdout
+    _same(reference, tmp_path / "rb.h5")

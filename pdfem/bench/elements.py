@@ -72,4 +72,53 @@ def print_elements(n, repeat, log=print):
     # Speed-up lines: numba throughput over numpy throughput
     for r in rows[::2]:
         log(f"speed-up numba/numpy {r['rule']}: {r['speedup']:.2f}x")
+    # The C yardstick of the 1-point elastic kernel (gcc -O3 -march=native), same mesh
+    c = c_yardstick(nx, ny, repeat)
+    if c is None:
+        log("C yardstick: no C compiler found (gcc or cc), skipped")
+    else:
+        log(f"C yardstick 1pt+hg elastic (gcc -O3 -march=native): numba "
+            f"{1e9 * c['numba'] / ne:.2f} ns/elem-update, C {1e9 * c['c'] / ne:.2f} "
+            f"ns/elem-update, numba/C = {c['numba'] / c['c']:.2f} (target <= 1.6; largest "
+            f"relative difference of the results {c['diff']:.1e})")
     return rows
+
+
+def c_yardstick(nx, ny, repeat):
+    """Median seconds per call of the numba 1-point kernel and its C twin on one mesh, and the
+    largest relative difference of their stresses, forces and hourglass forces (or None)."""
+    import time
+
+    import numpy as np
+
+    from pdfem.bench.cyardstick import load
+    from pdfem.bench.numpy_element import bench_mesh
+    from pdfem.kernels.element import q4_forces_1pt
+    from pdfem.kernels.params import BULK, ELASTIC, MODEL, NPAR, RHO, SHEAR
+
+    cfn = load()
+    if cfn is None:
+        return None
+    x, conn = bench_mesh(nx, ny)
+    ne = conn.shape[0]
+    mat = np.zeros((1, NPAR))
+    mat[0, [MODEL, RHO, BULK, SHEAR]] = [ELASTIC, 2000.0, 1e10, 6e9]
+    du = np.random.default_rng(1).uniform(-1e-6, 1e-6, size=x.shape)
+    out = {}
+    for name, fn in (("numba", q4_forces_1pt), ("c", cfn)):
+        sig, hgq = np.zeros((ne, 1, 4)), np.zeros((ne, 2))
+        f = np.zeros_like(x)
+        args = (x + du, du, conn, np.zeros(ne, np.int32), mat, sig, np.zeros((ne, 1, 0)), hgq,
+                0.1, 0, ne, f, np.zeros(ne), np.zeros(ne), np.zeros((0, 3)))
+        fn(*args)  # warm-up; also the state compared below (one call from zero)
+        res = (sig.copy(), f.copy(), hgq.copy())
+        times = []
+        for _ in range(repeat):
+            t0 = time.perf_counter()
+            fn(*args)
+            times.append(time.perf_counter() - t0)
+        out[name] = sorted(times)[len(times) // 2]
+        out[name + "_res"] = res
+    out["diff"] = max(float(np.max(np.abs(a - b)) / max(np.max(np.abs(a)), 1e-300))
+                      for a, b in zip(out["numba_res"], out["c_res"], strict=True))
+    return out

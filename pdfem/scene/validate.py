@@ -424,14 +424,8 @@ def _geometry(r, g, label):
     if "nodes" in g:
         _bed_geometry(r, g, label, blocks, box)
         return
-    lo, hi = geo.ellipse_aabb(g["center"], g["axes"], g["angle"])
-    i = geo.first_outside(lo, hi, box)
-    if i >= 0:
-        raise SceneError(label(i), "outside the domain box")
-    # Overlaps
-    pair = geo.first_block_overlap(blocks)
-    if pair:
-        raise SceneError(f"blocks[{pair[0]}]", f"overlaps blocks[{pair[1]}]")
+    _inside_box_and_apart(*geo.ellipse_aabb(g["center"], g["axes"], g["angle"]), box, blocks,
+                          label)
     hit = geo.first_grain_block_overlap(g["center"], g["axes"], g["angle"], blocks)
     if hit:
         raise SceneError(label(hit[0]), f"overlaps blocks[{hit[1]}] "
@@ -440,6 +434,16 @@ def _geometry(r, g, label):
     if pair:
         j = label(pair[1])
         raise SceneError(label(pair[0]), f"overlaps {j.replace('grains_file: ', '')} at t=0")
+
+
+def _inside_box_and_apart(lo, hi, box, blocks, label):
+    """Grain bounding boxes (lo, hi) inside the domain box; no two blocks overlapping."""
+    i = geo.first_outside(lo, hi, box)
+    if i >= 0:
+        raise SceneError(label(i), "outside the domain box")
+    pair = geo.first_block_overlap(blocks)
+    if pair:
+        raise SceneError(f"blocks[{pair[0]}]", f"overlaps blocks[{pair[1]}]")
 
 
 def _bed_geometry(r, g, label, blocks, box):
@@ -451,13 +455,7 @@ def _bed_geometry(r, g, label, blocks, box):
     """
     nodes = g["nodes"]
     tol = r["contact"]["delta_max"] if "contact" in r else 0.0
-    lo, hi = nodes.min(axis=1) + tol, nodes.max(axis=1) - tol
-    i = geo.first_outside(lo, hi, box)
-    if i >= 0:
-        raise SceneError(label(i), "outside the domain box")
-    pair = geo.first_block_overlap(blocks)
-    if pair:
-        raise SceneError(f"blocks[{pair[0]}]", f"overlaps blocks[{pair[1]}]")
+    _inside_box_and_apart(nodes.min(axis=1) + tol, nodes.max(axis=1) - tol, box, blocks, label)
     for k, bb in enumerate(blocks):
         inside = ((nodes[:, :, 0] > bb[0] + tol) & (nodes[:, :, 0] < bb[2] - tol)
                   & (nodes[:, :, 1] > bb[1] + tol) & (nodes[:, :, 1] < bb[3] - tol)).any(axis=1)

@@ -80,7 +80,8 @@ class Simulation:
         self.du = np.zeros_like(self.store.v)
         self.f = np.zeros_like(self.store.v)
         self.kin = np.zeros(self.store.nbody)
-        self.fc = np.zeros_like(self.store.v)
+        if self.keep_contact_force:
+            self.fc = np.zeros_like(self.store.v)
         if restart is not None:
             # Continue exactly where the checkpoint stopped
             st = self.checkpoint.state
@@ -149,8 +150,7 @@ class Simulation:
         grains = np.nonzero(~isg)[0]
         order = np.concatenate([glob[np.argsort(b.a["gid"][glob], kind="stable")],
                                 grains[np.argsort(b.a["gid"][grains], kind="stable")]])
-        full = Store(self.fields, Batch.concat(self.fields, [b]), b.nbody)
-        full = Store(self.fields, full.take(order), b.nbody)
+        full = Store(self.fields, Store(self.fields, b, b.nbody).take(order), b.nbody)
         cells = owned_grain_cells(full, self.grid, self.nglobal)
         weights = np.bincount(cells, minlength=self.grid.ncell).astype(float)
         self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,

@@ -33,6 +33,12 @@ conductivity = 0.3
 expansion = 1.0e-5
 """
 
+# A material without thermal properties
+PLAIN_M = """[materials.m]
+density = 1900.0
+bulk = 12.7e9
+shear = 4.4e9"""
+
 
 def block_scene(material, box, nx, ny, end, extra="", out="run.h5"):
     """One block body and the given material table (named m) with optional tables."""
@@ -201,10 +207,7 @@ temperature = 400.0
 
 
 def test_without_heat_no_temperature_exists(tmp_path):
-    mat = """[materials.m]
-density = 1900.0
-bulk = 12.7e9
-shear = 4.4e9"""
+    mat = PLAIN_M
     text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, out="cold.h5")
     sim = simulate(text, tmp_path)
     assert not hasattr(sim.store, "T") and not hasattr(sim, "heat")
@@ -280,10 +283,7 @@ softening = 1e-3"""
 
 
 def test_missing_material_input_names_the_key(tmp_path):
-    mat = """[materials.m]
-density = 1900.0
-bulk = 12.7e9
-shear = 4.4e9"""
+    mat = PLAIN_M
     text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, extra="[heat]\n")
     with pytest.raises(InputError, match=r"materials\.m\.specific_heat: required by \[heat\]"):
         parse_scene(text, str(tmp_path))

@@ -16,8 +16,11 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 US, MM, MPA = 1e6, 1e3, 1e-6
 
 
-def _save(fig, path):
-    """Write ``fig`` to ``path`` as PNG atomically and close it."""
+def _save(fig, path, grid_axes=()):
+    """Grid and legend on ``grid_axes``; write ``fig`` to ``path`` as PNG atomically, close."""
+    for a in grid_axes:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=8)
     tmp = path + ".part"
     fig.savefig(tmp, format="png", dpi=120, bbox_inches="tight")
     plt.close(fig)
@@ -81,10 +84,7 @@ def gauges_plot(t, hammer, anvil, path):
     a1.set_ylabel("-v_y [m/s]")
     a2.set_ylabel("-sigma_yy [MPa] (compression > 0)")
     a2.set_xlabel("t [us]")
-    for a in (a1, a2):
-        a.grid(alpha=0.3)
-        a.legend(fontsize=8)
-    _save(fig, path)
+    _save(fig, path, (a1, a2))
 
 
 def xt_plot(time, grain_y, y_f, fit, y_top0, hammer_y, anvil_y, path):
@@ -147,7 +147,4 @@ def sweep_plot(points, path):
             label="snowplow rho0 Us up at rho_s")
     a2.set_xlabel("density behind the front [kg/m^3]")
     a2.set_ylabel("stress [MPa] (compression > 0)")
-    for a in (a1, a2):
-        a.grid(alpha=0.3)
-        a.legend(fontsize=8)
-    _save(fig, path)
+    _save(fig, path, (a1, a2))

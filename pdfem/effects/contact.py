@@ -232,8 +232,8 @@ class Contact(Effect):
         s = sim.store
         # Heat of each contact on its two sides (this step, over sim.dt)
         heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and hasattr(sim, "dt")
-        q = np.zeros((active.shape[0], 2))
         if heat:
+            q = np.zeros((active.shape[0], 2))
             contact_heat(active, nodes, weights, res, s.T, self.heat_h, self.heat_fraction,
                          sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1])
         npair = pairs.shape[0]
@@ -244,7 +244,9 @@ class Contact(Effect):
         # Canonical orientation puts the grain (lower gid) first: its block side is gathered
         local_nodes[mixed, 2:] = -1
         sel = np.nonzero(mixed & (active == C_ACTIVE))[0]
-        rows = np.concatenate([keys[sel], nodes[sel], weights[sel], fa[sel], q[sel]], axis=1)
+        # Gathered rows carry the two heat columns either way (zero without heat)
+        qsel = q[sel] if heat else np.zeros((sel.shape[0], 2))
+        rows = np.concatenate([keys[sel], nodes[sel], weights[sel], fa[sel], qsel], axis=1)
         rows[:, 4:6] = -1
         if sim.nglobal == 0:
             got = rows

@@ -23,7 +23,7 @@ from pdfem.io.xdmf import write_xdmf
 from pdfem.store import ranges
 
 
-def frame_fields(resolved, nip, fields):
+def frame_fields(nip, fields):
     """The frame datasets of a run: the scene's output.fields, plus ``stress_cell`` (the
     element mean) when elements have several integration points."""
     out = list(fields)
@@ -58,7 +58,7 @@ class RunWriter:
     def __init__(self, path, sim, nframes, fields=("x", "v", "stress"), resume=None):
         comm = sim.comm
         self.comm, self.path = comm, path
-        self.fields = tuple(frame_fields(sim.resolved, sim.nip, fields))
+        self.fields = tuple(frame_fields(sim.nip, fields))
         self.tmp = path + ".part"
         self.nframes_max = nframes
         self.resumed = False

@@ -48,6 +48,7 @@ from pdfem.kernels.overlap import (
     OV_OVERFLOW,
     T_SRC,
     alloc_clip_buffers,
+    element_corners,
     halfplane_overlap,
     quad_overlap,
 )
@@ -73,14 +74,6 @@ C_INSIDE = -1  # one element inside the other (or behind the wall): penetration 
 C_NOEDGE = -2  # an element of the pair has no boundary edge
 C_NONORMAL = -3  # the contact normal is undefined (symmetric overlap)
 C_OVERFLOW = -4  # clip buffer overflow (cannot happen for convex quads)
-
-
-@njit(cache=True)
-def _gather(x, conn, e, xe):
-    """Current coordinates of element e's four nodes into xe (4, 2)."""
-    for k in range(4):
-        xe[k, 0] = x[conn[e, k], 0]
-        xe[k, 1] = x[conn[e, k], 1]
 
 
 @njit(cache=True)
@@ -222,8 +215,8 @@ def element_pair_forces(
         flip = egid[a] > egid[b] or (egid[a] == egid[b] and eloc[a] > eloc[b])
         if flip:
             a, b = b, a
-        _gather(x, conn, a, xa)
-        _gather(x, conn, b, xb)
+        element_corners(x, conn, a, xa)
+        element_corners(x, conn, b, xb)
         st, area, cx, cy, _, _, _, _, k = quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag)
         if st == OV_NONE:
             _clear(p, 0.0, active, nodes, weights, fa, us_out, res, C_NONE)
@@ -297,7 +290,7 @@ def element_wall_forces(
     nbad = 0
     for p in range(elems.shape[0]):
         e = elems[p]
-        _gather(x, conn, e, xa)
+        element_corners(x, conn, e, xa)
         st, area, cx, cy, _, _, _, _, k = halfplane_overlap(
             xa, wall_p0[p], wall_n[p], ox, oy, otag, wx, wy, wtag
         )

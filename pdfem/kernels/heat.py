@@ -23,16 +23,9 @@ import numpy as np
 from numba import njit
 
 from pdfem.kernels.element import ETA, GP, XI, _ip_grad
+from pdfem.kernels.overlap import element_corners
 from pdfem.kernels.params import ALPHA, BULK, COND, CP, RHO
 from pdfem.kernels.stable import element_length
-
-
-@njit(cache=True)
-def _corners(x, conn, e, xc):
-    """Current corner coordinates of element e into xc (4, 2)."""
-    for i in range(4):
-        xc[i, 0] = x[conn[e, i], 0]
-        xc[i, 1] = x[conn[e, i], 1]
 
 
 @njit(cache=True)
@@ -49,7 +42,7 @@ def conduction_flows(x, temp, conn, emat, mat_params, e0, e1, q):
         k = mat_params[emat[e], COND]
         if k == 0.0:
             continue
-        _corners(x, conn, e, xc)
+        element_corners(x, conn, e, xc)
         for ip in range(4):
             dv = _ip_grad(xc, GP * XI[ip], GP * ETA[ip], dx, dy)
             if dv <= 0.0:
@@ -95,7 +88,7 @@ def element_to_nodes(x, conn, e0, e1, val, out):
         v = val[e]
         if v == 0.0:
             continue
-        _corners(x, conn, e, xc)
+        element_corners(x, conn, e, xc)
         tot = 0.0
         for i in range(4):
             w[i] = 0.0

@@ -306,6 +306,14 @@ def halfplane_overlap(xa, p0, n, ox, oy, otag, wx, wy, wtag):
 
 
 @njit(cache=True)
+def element_corners(x, conn, e, xe):
+    """Current coordinates of element e's four nodes into xe (4, 2)."""
+    for k in range(4):
+        xe[k, 0] = x[conn[e, k], 0]
+        xe[k, 1] = x[conn[e, k], 1]
+
+
+@njit(cache=True)
 def element_bboxes(x, conn, e0, e1, out):
     """out[e] = (xmin, ymin, xmax, ymax) of element e's nodes for e in [e0, e1)."""
     for e in range(e0, e1):

@@ -98,7 +98,7 @@ def test_sigterm_checkpoints_and_the_restart_continues_the_run_file(tmp_path, re
     _same(reference, tmp_path / "c.h5")
 
 
-def test_sigkill_during_checkpoint_writes_leaves_a_readable_checkpoint(tmp_path, reference):
+def test_sigkill_of_a_run_checkpointing_every_step_keeps_a_readable_one(tmp_path, reference):
     # A checkpoint after every step: a kill lands in (or between) checkpoint writes
     scene = _bed(tmp_path, 4000, "\ncheckpoint_interval = 1.0e-12")
     proc = _start(["run", scene, "-o", "k.h5", "--quiet"], tmp_path)

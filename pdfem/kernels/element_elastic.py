@@ -1,0 +1,135 @@
+"""The 1-point quad with hourglass control for elastic materials: the fast path.
+
+The same algorithm as ``pdfem.kernels.element.q4_forces_1pt`` (see that module for the
+equations), operation for operation, specialised to isotropic hypo-elastic materials without
+internal state or thermal coupling: every quantity of an element lives in scalar locals (no
+scratch arrays, no material dispatch), which lets LLVM keep them in registers. The general
+kernel calls it when every row of the material table is elastic; the two give bit-identical
+results (tests/kernels/test_element.py). Sign convention: tension positive.
+"""
+
+from numba import njit
+
+from pdfem.kernels.elastic import elastic_increment
+from pdfem.kernels.params import BULK, SHEAR
+
+
+@njit(cache=True)
+def _mean_gradient(x0, y0, x1, y1, x2, y2, x3, y3):
+    """Area and Flanagan-Belytschko mean gradients (bx0..bx3, by0..by3) of a quad (b unset
+    (zero) when the area is not positive)."""
+    a = 0.5 * ((x2 - x0) * (y3 - y1) - (x3 - x1) * (y2 - y0))
+    if a <= 0.0:
+        return a, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    r = 1.0 / (2.0 * a)
+    return (a, (y1 - y3) * r, (y2 - y0) * r, (y3 - y1) * r, (y0 - y2) * r,
+            (x3 - x1) * r, (x0 - x2) * r, (x1 - x3) * r, (x2 - x0) * r)
+
+
+@njit(cache=True)
+def _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1, by2, by3):
+    """Hourglass vector (g0..g3) for h = (1, -1, 1, -1)."""
+    hx = 1.0 * x0 + -1.0 * x1 + 1.0 * x2 + -1.0 * x3
+    hy = 1.0 * y0 + -1.0 * y1 + 1.0 * y2 + -1.0 * y3
+    return (0.25 * (1.0 - hx * bx0 - hy * by0), 0.25 * (-1.0 - hx * bx1 - hy * by1),
+            0.25 * (1.0 - hx * bx2 - hy * by2), 0.25 * (-1.0 - hx * bx3 - hy * by3))
+
+
+@njit(cache=True)
+def q4_forces_1pt_elastic(x, du, conn, emat, mat_params, sig, hgq, hg_coef, e0, e1, f, ewint):
+    """q4_forces_1pt for elastic materials (no state, no heat) on elements [e0, e1).
+
+    Updates sig (ne,1,4) and hgq (ne,2) (shape (0, 2): no hourglass control) in place,
+    subtracts the internal forces from f, adds stress and hourglass work to ewint. Returns
+    -1, or the first element with a non-positive (mid-step or current) area.
+    """
+    has_hg = hgq.shape[0] > 0
+    for e in range(e0, e1):
+        p = mat_params[emat[e]]
+        # Current coordinates, increments and mid-step coordinates of the 4 nodes
+        n0 = conn[e, 0]
+        n1 = conn[e, 1]
+        n2 = conn[e, 2]
+        n3 = conn[e, 3]
+        x0, y0, u0, v0 = x[n0, 0], x[n0, 1], du[n0, 0], du[n0, 1]
+        x1, y1, u1, v1 = x[n1, 0], x[n1, 1], du[n1, 0], du[n1, 1]
+        x2, y2, u2, v2 = x[n2, 0], x[n2, 1], du[n2, 0], du[n2, 1]
+        x3, y3, u3, v3 = x[n3, 0], x[n3, 1], du[n3, 0], du[n3, 1]
+        m0, l0 = x0 - 0.5 * u0, y0 - 0.5 * v0
+        m1, l1 = x1 - 0.5 * u1, y1 - 0.5 * v1
+        m2, l2 = x2 - 0.5 * u2, y2 - 0.5 * v2
+        m3, l3 = x3 - 0.5 * u3, y3 - 0.5 * v3
+        # Strain and spin increment from the mid-step mean gradient
+        am, bx0, bx1, bx2, bx3, by0, by1, by2, by3 = _mean_gradient(m0, l0, m1, l1, m2, l2,
+                                                                    m3, l3)
+        if am <= 0.0:
+            return e
+        gxx = u0 * bx0 + u1 * bx1 + u2 * bx2 + u3 * bx3
+        gxy = u0 * by0 + u1 * by1 + u2 * by2 + u3 * by3
+        gyx = v0 * bx0 + v1 * bx1 + v2 * bx2 + v3 * bx3
+        gyy = v0 * by0 + v1 * by1 + v2 * by2 + v3 * by3
+        w = 0.5 * (gxy - gyx)
+        d = 1.0 / (1.0 + 0.25 * w * w)
+        c = (1.0 - 0.25 * w * w) * d
+        sn = w * d
+        # Rotate the stress (Cayley), add the elastic increment, trapezoidal work density
+        s = sig[e, 0]
+        sxx, syy, sxy = s[0], s[1], s[2]
+        r0 = c * c * sxx + 2.0 * c * sn * sxy + sn * sn * syy
+        r1 = sn * sn * sxx - 2.0 * c * sn * sxy + c * c * syy
+        r2 = c * sn * (syy - sxx) + (c * c - sn * sn) * sxy
+        r3 = s[3]
+        d0, d1, d2, d3 = gxx - 0.0, gyy - 0.0, 0.5 * (gxy + gyx), -0.0
+        i0, i1, i2, i3 = elastic_increment(p, d0, d1, d2, d3)
+        t0, t1, t2, t3 = r0 + i0, r1 + i1, r2 + i2, r3 + i3
+        s[0], s[1], s[2], s[3] = t0, t1, t2, t3
+        wk = 0.5 * ((r0 + t0) * d0 + (r1 + t1) * d1 + 2.0 * (r2 + t2) * d2 + (r3 + t3) * d3)
+        # Hourglass displacement increment at mid-step
+        dq0 = 0.0
+        dq1 = 0.0
+        if has_hg:
+            g0, g1, g2, g3 = _gamma(m0, l0, m1, l1, m2, l2, m3, l3, bx0, bx1, bx2, bx3,
+                                    by0, by1, by2, by3)
+            dq0 = g0 * u0 + g1 * u1 + g2 * u2 + g3 * u3
+            dq1 = g0 * v0 + g1 * v1 + g2 * v2 + g3 * v3
+        # Current geometry: area and gradients for the forces
+        a, bx0, bx1, bx2, bx3, by0, by1, by2, by3 = _mean_gradient(x0, y0, x1, y1, x2, y2,
+                                                                   x3, y3)
+        if a <= 0.0:
+            return e
+        ewint[e] += wk * a
+        # Stress divergence forces f_I = A sig . b_I
+        fx0, fy0 = a * (t0 * bx0 + t2 * by0), a * (t2 * bx0 + t1 * by0)
+        fx1, fy1 = a * (t0 * bx1 + t2 * by1), a * (t2 * bx1 + t1 * by1)
+        fx2, fy2 = a * (t0 * bx2 + t2 * by2), a * (t2 * bx2 + t1 * by2)
+        fx3, fy3 = a * (t0 * bx3 + t2 * by3), a * (t2 * bx3 + t1 * by3)
+        # Rotate and increment the hourglass forces, add their work and nodal forces
+        if has_hg:
+            bb = bx0 * bx0 + by0 * by0
+            bb += bx1 * bx1 + by1 * by1
+            bb += bx2 * bx2 + by2 * by2
+            bb += bx3 * bx3 + by3 * by3
+            k = hg_coef * ((p[BULK] + 4.0 * p[SHEAR] / 3.0) * a * bb)
+            q0 = c * hgq[e, 0] + sn * hgq[e, 1]
+            q1 = c * hgq[e, 1] - sn * hgq[e, 0]
+            h0 = q0 + k * dq0
+            h1 = q1 + k * dq1
+            hgq[e, 0] = h0
+            hgq[e, 1] = h1
+            ewint[e] += 0.5 * ((q0 + h0) * dq0 + (q1 + h1) * dq1)
+            g0, g1, g2, g3 = _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3,
+                                    by0, by1, by2, by3)
+            fx0, fy0 = fx0 + h0 * g0, fy0 + h1 * g0
+            fx1, fy1 = fx1 + h0 * g1, fy1 + h1 * g1
+            fx2, fy2 = fx2 + h0 * g2, fy2 + h1 * g2
+            fx3, fy3 = fx3 + h0 * g3, fy3 + h1 * g3
+        # f -= fe, node by node
+        f[n0, 0] -= fx0
+        f[n0, 1] -= fy0
+        f[n1, 0] -= fx1
+        f[n1, 1] -= fy1
+        f[n2, 0] -= fx2
+        f[n2, 1] -= fy2
+        f[n3, 0] -= fx3
+        f[n3, 1] -= fy3
+    return -1

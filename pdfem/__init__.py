@@ -5,4 +5,8 @@ touch through the overlap contact of Ghaboussi & Joghataie (1997); the contact c
 also the MPI domain decomposition. Results are bit-for-bit identical on any number of ranks.
 """
 
+import time as _time
+
 __version__ = "0.1.0"
+# When pdfem was first imported (the start-up figure counts from here)
+STARTED = _time.perf_counter()

@@ -5,6 +5,7 @@ import os
 import sys
 import time
 
+import pdfem
 from pdfem.energy import TERMS, balance, global_terms
 from pdfem.errors import SimulationError
 from pdfem.gauges import Gauges
@@ -53,6 +54,7 @@ def run(sim, out_path, quiet=False, log=print):
     t0 = time.perf_counter()
     last_log = t0
     stopped = False
+    first_step = None
     try:
         if sim.restarted:
             rows, ref = ckpt.restore(frames, samples, gsched, gauges, writer, log)
@@ -70,6 +72,11 @@ def run(sim, out_path, quiet=False, log=print):
                 if sim.max_steps and sim.nstep >= sim.max_steps:
                     break
                 sim.step()
+                if first_step is None:
+                    # Start-up figure: from the pdfem import to the end of the first step
+                    first_step = time.perf_counter() - pdfem.STARTED
+                    if comm.rank == 0 and not quiet:
+                        log(f"first step at {first_step:.2f} s after start")
                 at_end = sim.t >= sim.t_end * (1 - 1e-12)
                 if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
                     with sim.timers.phase("output"):
@@ -107,7 +114,8 @@ def run(sim, out_path, quiet=False, log=print):
                "balance_error": rows[-1][-1] if rows else None, "stopped": stopped,
                "checkpoint": ckpt.path if stopped else None,
                "phases": report, "effects": sim.effect_names, "ranks": comm.size,
-               "imbalance": sim.timers.imbalance(comm), "rebalances": sim.rebalances}
+               "imbalance": sim.timers.imbalance(comm), "rebalances": sim.rebalances,
+               "first_step_s": first_step}
     if comm.rank == 0 and not quiet:
         _report(summary, log)
     return summary

@@ -58,9 +58,30 @@ def test_bench_contact_prints_the_bed_row(tmp_path):
     ["bench", "contact", "--sizes", "1000,x"],
     ["bench", "contact", "--sizes", ","],
     ["bench", "elements", "--sizes", "100"],
+    ["bench", "parallel", "--per-rank", "1"],
+    ["bench", "parallel"],
+    ["bench", "all", "--per-rank", "x"],
+    ["bench", "startup", "--repeat", "0"],
+    ["bench", "contact", "--material", "rubber"],
 ])
 def test_bench_bad_arguments_exit_2_with_one_line(tmp_path, args):
     p = pdfem(args, tmp_path)
     assert p.returncode == 2
     assert p.stderr.startswith("pdfem: error:") and p.stderr.count("\n") == 1, p.stderr
     assert p.stdout == ""
+
+
+def test_bench_all_prints_every_figure_beside_its_target(tmp_path):
+    p = pdfem(["bench", "all", "--n", "2000", "--sizes", "200,300", "--per-rank", "150",
+               "--repeat", "1", "--warm-only"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    out = p.stdout
+    # The closing table: every figure measured (a C compiler and mpirun are installed here)
+    table = out[out.index("figure"):]
+    for name in ("numba/C 1pt elastic", "numba/C 2x2 cap", "step us/grain-step",
+                 "linearity", "kB/grain", "parallel overhead %", "warm start s"):
+        m = re.search(rf"^{re.escape(name)}.*?\s{NUM}\s+{NUM}\s+(yes|NO)$", table, re.M)
+        assert m and _positive(m.groups()[:2]), f"{name} not measured in:\n{table}"
+    # The parallel child ran on 2 ranks and the start-up run printed its first step
+    assert "on 2 ranks (150 per rank, strips)" in out
+    assert re.search(rf"^warm \(cache filled\): first step at {NUM} s", out, re.M)

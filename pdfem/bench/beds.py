@@ -53,13 +53,23 @@ def hex_bed(n, r0=2.0e-4, seed=0):
     return cols, box
 
 
+# Grain materials of the benchmark beds: elastic HMX, or HMX with the scene's cap set
+# (pdfem/scenes/shot912.toml, crystal density)
+MATERIALS = {
+    "elastic": 'model = "elastic"\ndensity = 1900.0\nbulk = 12.7e9\nshear = 4.4e9\n',
+    "cap": ('model = "cap"\ndensity = 1900.0\nbulk = 12.7e9\nshear = 4.4e9\nA = 2.0e8\n'
+            'B = 2.0e-9\nC = 1.5e8\nD = 5.0e-10\nR = 2.0\nW = 0.05\nkappa0 = -1.0e9\n'),
+}
+
+
 def bed_scene(n, folder, r0=2.0e-4, seed=0, inflate=1.12, level=1, kn0=1.0e11, gamma=1.0e5,
-              g=-9.81):
+              g=-9.81, material="elastic", rule="1pt"):
     """Write ``bed.npz`` (columns x, y, a, b, angle) into ``folder``; return the scene TOML text.
 
-    The scene has elastic grains (level ``level`` meshes), gravity g, damping gamma, the
-    overlap contact (kn0, delta_max = 0.3 r0, friction 0.3) and frictionless side walls and a
-    frictional floor. cell_size and skin are explicit and allow for grains grown by ``inflate``.
+    The scene has grains of ``material`` (a MATERIALS key; level ``level`` meshes, integration
+    ``rule``), gravity g, damping gamma, the overlap contact (kn0, delta_max = 0.3 r0,
+    friction 0.3) and frictionless side walls and a frictional floor. cell_size and skin are
+    explicit and allow for grains grown by ``inflate``.
     """
     cols, box = hex_bed(n, r0, seed)
     np.savez(f"{folder}/bed.npz", **cols)
@@ -76,6 +86,7 @@ end = 1.0
 
 [element]
 level = {level}
+rule = "{rule}"
 
 [gravity]
 g = [0.0, {g!r}]
@@ -84,11 +95,7 @@ g = [0.0, {g!r}]
 gamma = {gamma!r}
 
 [materials.grain]
-model = "elastic"
-density = 1900.0
-bulk = 12.7e9
-shear = 4.4e9
-
+{MATERIALS[material]}
 [contact]
 kn0 = {kn0!r}
 delta_max = {0.3 * r0!r}

@@ -77,7 +77,7 @@ def _sample(sim, eff, n, k):
     """Run k steps; per step: step s, detection s, forces s, element pairs evaluated and
     active per grain."""
     tm = sim.timers.seconds
-    d0, f0 = tm["contact_detection"], tm["contact_forces"]
+    d0, f0, e0 = tm["contact_detection"], tm["contact_forces"], tm["elements"]
     step = active = evaluated = 0.0
     for _ in range(k):
         t0 = time.perf_counter()
@@ -87,11 +87,12 @@ def _sample(sim, eff, n, k):
         active += (eff._last["active"] == C_ACTIVE).sum() / n
         evaluated += eff._last["active"].shape[0] / n
     return (step / k, (tm["contact_detection"] - d0) / k, (tm["contact_forces"] - f0) / k,
-            evaluated / k, active / k)
+            evaluated / k, active / k, (tm["elements"] - e0) / k)
 
 
-def run_contact(n, repeat):
-    """Build an n-grain bed, time ``repeat`` samples; return a dict of figures."""
+def run_contact(n, repeat, material="elastic"):
+    """Build an n-grain bed of ``material`` grains (pdfem.bench.beds.MATERIALS), time
+    ``repeat`` samples; return a dict of figures."""
     from mpi4py import MPI
 
     from pdfem.scene import parse_scene
@@ -103,7 +104,8 @@ def run_contact(n, repeat):
     with tempfile.TemporaryDirectory() as folder:
         # Scene, bed file, Simulation (grains grown by the init_state hook)
         t0 = time.perf_counter()
-        scene = parse_scene(bed_scene(n, folder, inflate=INFLATE), folder, name="bench-bed")
+        scene = parse_scene(bed_scene(n, folder, inflate=INFLATE, material=material), folder,
+                            name="bench-bed")
         sim = Simulation(scene, MPI.COMM_SELF, init_state=inflate_grains(INFLATE))
         setup = time.perf_counter() - t0
     eff = _contact_effect(sim)
@@ -113,11 +115,13 @@ def run_contact(n, repeat):
     k = steps_per_sample(n)
     reb0 = sim.timers.calls["migration"]
     samples = [_sample(sim, eff, n, k) for _ in range(repeat)]
-    step, det, frc, evald, act = (statistics.median(col) for col in zip(*samples, strict=True))
+    step, det, frc, evald, act, elem = (statistics.median(col)
+                                        for col in zip(*samples, strict=True))
     share = statistics.median((s[1] + s[2]) / s[0] for s in samples)
     coord = _coordination(eff, n)
     out = {"grains": n, "elements": int(sim.store.ne_own), "steps": k, "step": step,
-           "detection": det, "forces": frc, "contact": det + frc, "share": share,
+           "detection": det, "forces": frc, "elements_s": elem, "contact": det + frc,
+           "share": share,
            "evaluated": evald, "active": act, "coordination": coord, "setup": setup,
            "rebuilds": sim.timers.calls["migration"] - reb0,
            "rss_per_grain": (rss_bytes() - rss0) / n,
@@ -127,9 +131,10 @@ def run_contact(n, repeat):
     return out
 
 
-def print_contact(sizes, repeat, log=print):
+def print_contact(sizes, repeat, log=print, material="elastic"):
     """Run the contact benchmark for each bed size and print its table; return the rows."""
-    log(f"pdfem bench contact: dense beds of level-1 grains (6 elements each), serial, "
+    log(f"pdfem bench contact: dense beds of level-1 {material} grains (6 elements each, 1-point "
+        "rule), serial, "
         f"median of {repeat} samples of k steps after {WARMUP} warm-up steps "
         "(numba compile excluded)")
     log(machine())
@@ -139,10 +144,10 @@ def print_contact(sizes, repeat, log=print):
             f"{'pairs/grain':>13}{'contacts/grain':>16}{'coord':>7}{'kB/grain':>10}{'rebuilds':>10}")
     log(head)
     # An untimed small bed first: kernels compiled or loaded, modules imported, pools grown
-    run_contact(PRIME, 1)
+    run_contact(PRIME, 1, material)
     # One bed per size, smallest first
     for n in sizes:
-        r = run_contact(n, repeat)
+        r = run_contact(n, repeat, material)
         rows.append(r)
         log(f"{n:>8}{r['elements']:>9}{r['steps']:>4}{1e3 * r['step']:>10.3f}"
             f"{1e3 * r['detection']:>11.3f}{1e3 * r['forces']:>11.3f}{1e3 * r['contact']:>12.3f}"
@@ -154,12 +159,15 @@ def print_contact(sizes, repeat, log=print):
     # Whole-step time per grain-step, and linearity of the contact time
     for r in rows:
         log(f"step time per grain-step at {r['grains']} grains: "
-            f"{1e6 * r['step'] / r['grains']:.3f} us (set-up {r['setup']:.2f} s); memory "
+            f"{1e6 * r['step'] / r['grains']:.3f} us (elements "
+            f"{1e6 * r['elements_s'] / r['grains']:.3f}, contact "
+            f"{1e6 * r['contact'] / r['grains']:.3f}; set-up {r['setup']:.2f} s); memory "
             f"{r['rss_per_grain'] / 1024:.2f} kB/grain resident after the steps, peak "
             f"{r['peak_per_grain'] / 1024:.2f} kB/grain")
     if len(rows) > 1:
         lo, hi = rows[0], rows[-1]
         ratio = (hi["contact"] / hi["grains"]) / (lo["contact"] / lo["grains"])
-        log(f"linearity: contact time per grain at {hi['grains']} / at {lo['grains']} grains: "
-            f"{ratio:.2f}")
+        step = (hi["step"] / hi["grains"]) / (lo["step"] / lo["grains"])
+        log(f"linearity: per grain-step at {hi['grains']} / at {lo['grains']} grains: contact "
+            f"{ratio:.2f}, whole step {step:.2f}")
     return rows

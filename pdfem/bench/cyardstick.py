@@ -1,9 +1,13 @@
-"""The C yardstick of the 1-point elastic element kernel: build with gcc, call with ctypes.
+"""C yardsticks of the element kernels: build with gcc, call with ctypes.
 
-``load()`` compiles ``pdfem/bench/c/q4_1pt.c`` with ``gcc -O3 -march=native -shared -fPIC``
-into a per-user cache folder (rebuilt when the source changes) and returns a Python callable
-with the numba kernel's argument list (elastic only, no thermal coupling), or None when no C
-compiler is available.
+``load(name)`` compiles ``pdfem/bench/c/<name>.c`` with ``gcc -O3 -march=native -shared
+-fPIC`` into a per-user cache folder (one .so per source, keyed by a hash of the source and
+the flags, so an edited source is rebuilt) and returns a Python callable with the numba
+kernel's argument list, or None when no C compiler is available:
+
+    q4_1pt      pdfem.kernels.element.q4_forces_1pt, elastic materials only
+    q4_2x2_cap  pdfem.kernels.element.q4_forces_2x2 with material state (cap, elastic), no
+                thermal coupling
 """
 
 import ctypes
@@ -17,33 +21,42 @@ from importlib import resources
 import numpy as np
 
 FLAGS = ["-O3", "-march=native", "-shared", "-fPIC"]
+# Libraries linked after the source, per kernel
+LIBS = {"q4_1pt": [], "q4_2x2_cap": ["-lm"]}
 
 
-def _library():
-    """Path of the built shared library, or None without gcc."""
+def _library(name="q4_1pt"):
+    """Path of the built shared library of bench/c/<name>.c, or None without gcc."""
     gcc = shutil.which("gcc") or shutil.which("cc")
     if gcc is None:
         return None
-    src = resources.files("pdfem") / "bench" / "c" / "q4_1pt.c"
+    src = resources.files("pdfem") / "bench" / "c" / f"{name}.c"
     text = src.read_bytes()
-    tag = hashlib.sha256(text + " ".join(FLAGS).encode()).hexdigest()[:16]
+    libs = LIBS[name]
+    tag = hashlib.sha256(text + " ".join(FLAGS + libs).encode()).hexdigest()[:16]
     folder = os.path.join(tempfile.gettempdir(), f"pdfem-c-{os.getuid()}")
     os.makedirs(folder, exist_ok=True)
-    lib = os.path.join(folder, f"q4_1pt-{tag}.so")
+    lib = os.path.join(folder, f"{name}-{tag}.so")
     if not os.path.exists(lib):
         tmp = lib + f".{os.getpid()}.part"
-        subprocess.run([gcc, *FLAGS, "-o", tmp, str(src)], check=True, capture_output=True)
+        subprocess.run([gcc, *FLAGS, "-o", tmp, str(src), *libs], check=True,
+                       capture_output=True)
         os.replace(tmp, lib)
     return lib
 
 
-def load():
-    """A callable ``fn(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1, f, ewint, ewp,
-    eth)`` running the C kernel (mst, ewp and eth are ignored: elastic, no heat), or None."""
-    path = _library()
-    if path is None:
-        return None
-    lib = ctypes.CDLL(path)
+def _check(arrays, floats):
+    """C-contiguous arrays, float64 where the kernel reads doubles."""
+    for a in arrays:
+        if not a.flags.c_contiguous:
+            raise ValueError("the C kernel needs C-contiguous arrays")
+    for a in floats:
+        if a.dtype != np.float64:
+            raise ValueError("the C kernel needs float64 arrays")
+
+
+def _load_1pt(lib):
+    """Callable of the 1-point elastic kernel (mst, ewp and eth are ignored)."""
     fn = lib.q4_forces_1pt_elastic
     dbl, i64 = ctypes.c_double, ctypes.c_int64
     ptr = ctypes.c_void_p
@@ -51,13 +64,52 @@ def load():
     fn.restype = i64
 
     def call(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1, f, ewint, ewp, eth):
-        arrays = (x, du, conn, emat, mat, sig, hgq, f, ewint)
-        for a in arrays:
-            if not a.flags.c_contiguous:
-                raise ValueError("the C kernel needs C-contiguous arrays")
+        _check((x, du, conn, emat, mat, sig, hgq, f, ewint), ())
         assert conn.dtype == np.int64 and emat.dtype == np.int32
         return fn(x.ctypes.data, du.ctypes.data, conn.ctypes.data, emat.ctypes.data,
                   mat.ctypes.data, mat.shape[1], sig.ctypes.data, hgq.ctypes.data, hg_coef,
                   e0, e1, f.ctypes.data, ewint.ctypes.data)
 
     return call
+
+
+def _load_2x2_cap(lib):
+    """Callable of the 2x2 kernel with material state (hgq, hg_coef ignored as in numba)."""
+    fn = lib.q4_forces_2x2_cap
+    i64 = ctypes.c_int64
+    ptr = ctypes.c_void_p
+    fn.argtypes = [ptr, ptr, ptr, ptr, ptr, i64, ptr, ptr, i64, i64, i64, ptr, ptr, ptr]
+    fn.restype = i64
+
+    def call(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1, f, ewint, ewp, eth):
+        _check((x, du, conn, emat, mat, sig, mst, f, ewint, ewp),
+               (x, du, mat, sig, mst, f, ewint, ewp))
+        assert conn.dtype == np.int64 and emat.dtype == np.int32
+        if sig.shape[1] != 4:
+            raise ValueError("q4_forces_2x2 needs sig of shape (ne, 4, 4)")
+        if mst.shape[0] != sig.shape[0] or mst.shape[1] != 4 or mst.shape[2] < 6:
+            raise ValueError("the C 2x2 cap kernel needs mst of shape (ne, 4, >= 6)")
+        if eth.shape[0] > 0:
+            raise ValueError("the C 2x2 cap kernel has no thermal coupling (eth (0, 3))")
+        return fn(x.ctypes.data, du.ctypes.data, conn.ctypes.data, emat.ctypes.data,
+                  mat.ctypes.data, mat.shape[1], sig.ctypes.data, mst.ctypes.data,
+                  mst.shape[2], e0, e1, f.ctypes.data, ewint.ctypes.data, ewp.ctypes.data)
+
+    return call
+
+
+def load(name="q4_1pt"):
+    """A callable ``fn(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1, f, ewint, ewp,
+    eth)`` running the C kernel ``name`` (see the module docstring), or None without gcc."""
+    makers = {"q4_1pt": _load_1pt, "q4_2x2_cap": _load_2x2_cap}
+    if name not in makers:
+        raise ValueError(f"unknown C yardstick {name!r} (have {', '.join(makers)})")
+    path = _library(name)
+    if path is None:
+        return None
+    return makers[name](ctypes.CDLL(path))
+
+
+def load_2x2_cap():
+    """``load("q4_2x2_cap")``: the C twin of q4_forces_2x2 for cap materials (or None)."""
+    return load("q4_2x2_cap")

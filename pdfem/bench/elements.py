@@ -57,7 +57,8 @@ def run_elements(n, repeat):
 
 
 def print_elements(n, repeat, log=print):
-    """Run the element benchmark and print its table; return the rows."""
+    """Run the element benchmark and print its table; return (rows, C-yardstick dict or
+    None)."""
     rows, (nx, ny) = run_elements(n, repeat)
     ne = rows[0]["elements"]
     log(f"pdfem bench elements: {ne} elements ({nx} x {ny} jittered unit quads), elastic, "
@@ -81,7 +82,7 @@ def print_elements(n, repeat, log=print):
             f"{1e9 * c['numba'] / ne:.2f} ns/elem-update, C {1e9 * c['c'] / ne:.2f} "
             f"ns/elem-update, numba/C = {c['numba'] / c['c']:.2f} (target <= 1.6; largest "
             f"relative difference of the results {c['diff']:.1e})")
-    return rows
+    return rows, c
 
 
 def c_yardstick(nx, ny, repeat):

@@ -1,12 +1,16 @@
-"""``pdfem bench {elements,contact,all}``: print single-core performance figures.
+"""``pdfem bench {elements,contact,parallel,startup,all}``: print performance figures.
 
 elements: element updates per second of both integration rules, numba kernels vs their
-numpy twins (pdfem.bench.elements); with --material cap and/or --heat, the cost per
-element-step of those effects in real solver steps beside the elastic baseline
-(pdfem.bench.effects). contact: contact detection and force time per step on dense
-grain beds of several sizes (pdfem.bench.contact). all: both. Figures are printed, never
-asserted; run on one rank.
+numpy twins and the 1-point kernel vs its C yardstick (pdfem.bench.elements); with
+--material cap and/or --heat, the cost per element-step of those effects in real solver steps
+(pdfem.bench.effects). contact: whole steps of dense grain beds of several sizes, contact and
+element time, memory per grain (pdfem.bench.contact). parallel: halo and migration cost,
+under mpirun (pdfem.bench.parallel). startup: seconds to the first step of a fresh process
+(pdfem.bench.startup). all: every figure with its target (pdfem.bench.suite). Figures are
+printed, never asserted; all but parallel run on one rank.
 """
+
+import json
 
 from pdfem.errors import InputError
 
@@ -33,54 +37,82 @@ def _sizes(text):
 
 def add_parser(sub):
     """Register the ``bench`` command and its sub-commands."""
-    p = sub.add_parser("bench", help="print single-core performance figures",
+    p = sub.add_parser("bench", help="print performance figures",
                        description=__doc__.split("\n\n")[1])
-    what = p.add_subparsers(dest="what", metavar="{elements,contact,all}", required=True,
-                            parser_class=type(p))
-    # Arguments of each sub-command (all takes both sets)
-    el = what.add_parser("elements", help="element force kernels: numba vs numpy")
-    co = what.add_parser("contact", help="contact detection and forces on grain beds")
-    al = what.add_parser("all", help="elements, then contact")
+    what = p.add_subparsers(dest="what", metavar="{elements,contact,parallel,startup,all}",
+                            required=True, parser_class=type(p))
+    # Arguments of each sub-command (all takes the union)
+    el = what.add_parser("elements", help="element force kernels: numba vs numpy and C")
+    co = what.add_parser("contact", help="whole steps of dense grain beds")
+    pa = what.add_parser("parallel", help="halo and migration cost (run under mpirun)")
+    su = what.add_parser("startup", help="seconds to the first step, cold and warm")
+    al = what.add_parser("all", help="every figure with its target")
     for q in (el, al):
         q.add_argument("--n", default="100000", help="number of elements (default 100000)")
     el.add_argument("--material", default="elastic", choices=("elastic", "cap"),
                     help="material of the effect-cost table (default elastic)")
     el.add_argument("--heat", action="store_true", help="heat on in the effect-cost table")
+    co.add_argument("--material", default="elastic", choices=("elastic", "cap"),
+                    help="grain material (default elastic)")
     for q in (co, al):
         q.add_argument("--sizes", default="1000,10000,100000",
                        help="bed sizes in grains, comma-separated (default 1000,10000,100000)")
-    for q in (el, co, al):
+    for q in (pa, al):
+        q.add_argument("--per-rank", default="10000", help="grains per rank (default 10000)")
+    pa.add_argument("--json", default=None, help="also write the figures to this JSON file")
+    for q in (su, al):
+        q.add_argument("--warm-only", action="store_true", help="skip the cold start (a "
+                       "private empty numba cache: every kernel compiled, about 30 s)")
+    for q in (el, co, pa, su, al):
         q.add_argument("--repeat", default="5", help="timed samples; the median is printed "
                        "(default 5)")
     return p
 
 
 def run(args):
-    """Check the arguments, then run the chosen benchmarks on one rank."""
+    """Check the arguments, then run the chosen benchmarks."""
     from pdfem.parallel.mpi import world
 
     # Arguments first: a bad one costs no benchmark time
     repeat = _positive_int("--repeat", args.repeat)
-    n = _positive_int("--n", args.n) if args.what in ("elements", "all") else None
-    sizes = _sizes(args.sizes) if args.what in ("contact", "all") else None
-    if world().size > 1:
-        raise InputError("bench: runs on one rank (single-core figures); start it without "
-                         "mpirun")
-    from pdfem.bench.contact import print_contact
-    from pdfem.bench.elements import print_elements
+    n = _positive_int("--n", args.n) if hasattr(args, "n") else None
+    sizes = _sizes(args.sizes) if hasattr(args, "sizes") else None
+    per_rank = _positive_int("--per-rank", args.per_rank, least=2) \
+        if hasattr(args, "per_rank") else None
+    if args.what == "parallel":
+        from pdfem.bench.parallel import print_parallel
 
-    # The chosen benchmarks, each printing its own table
-    effects = args.what == "elements" and (args.material != "elastic" or args.heat)
-    if effects:
+        if world().size < 2:
+            raise InputError("bench parallel: start it under mpirun with 2 or more ranks")
+        r = print_parallel(per_rank, repeat, log=_log)
+        if args.json and world().rank == 0:
+            with open(args.json, "w") as f:
+                json.dump(r, f)
+        return 0
+    if world().size > 1:
+        raise InputError(f"bench {args.what}: runs on one rank (single-core figures); start it "
+                         "without mpirun")
+    # The chosen benchmark, printing its own table
+    if args.what == "all":
+        from pdfem.bench.suite import run_all
+
+        run_all(repeat, n, sizes, per_rank, log=_log, cold=not args.warm_only)
+    elif args.what == "elements" and (args.material != "elastic" or args.heat):
         from pdfem.bench.effects import print_effects
 
         print_effects(n, repeat, args.material, args.heat, log=_log)
-    elif n is not None:
+    elif args.what == "elements":
+        from pdfem.bench.elements import print_elements
+
         print_elements(n, repeat, log=_log)
-    if n is not None and sizes is not None:
-        _log("")
-    if sizes is not None:
-        print_contact(sizes, repeat, log=_log)
+    elif args.what == "contact":
+        from pdfem.bench.contact import print_contact
+
+        print_contact(sizes, repeat, log=_log, material=args.material)
+    else:
+        from pdfem.bench.startup import print_startup
+
+        print_startup(repeat, cold=not args.warm_only, log=_log)
     return 0
 
 

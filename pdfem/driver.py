@@ -37,6 +37,13 @@ def run(sim, out_path, quiet=False, log=print):
     writes one, leaves the run file as ``<out_path>.part`` for the restart and returns with
     ``summary["stopped"]`` set.
     """
+    # SIGTERM caught from the start: one that arrives during set-up still ends in a checkpoint
+    with catch_sigterm(sim):
+        return _run(sim, out_path, quiet, log)
+
+
+def _run(sim, out_path, quiet, log):
+    """The body of :func:`run`."""
     comm, r = sim.comm, sim.resolved
     out = r["output"]
     interval, e_interval = out["interval"], out["energy_interval"]
@@ -67,38 +74,37 @@ def run(sim, out_path, quiet=False, log=print):
             if comm.rank == 0:
                 ref = terms
                 rows.append(_row(sim.t, terms, ref))
-        with catch_sigterm(sim):
-            while sim.t < sim.t_end * (1 - 1e-12):
-                if sim.max_steps and sim.nstep >= sim.max_steps:
-                    break
-                sim.step()
-                if first_step is None:
-                    # Start-up figure: from the pdfem import to the end of the first step
-                    first_step = time.perf_counter() - pdfem.STARTED
-                    if comm.rank == 0 and not quiet:
-                        log(f"first step at {first_step:.2f} s after start")
-                at_end = sim.t >= sim.t_end * (1 - 1e-12)
-                if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
-                    with sim.timers.phase("output"):
-                        writer.write_frame(sim)
-                if len(gauges) and (gsched.due(sim.t) or at_end):
-                    with sim.timers.phase("diagnostics"):
-                        gauges.sample(sim)
-                if samples.due(sim.t) or at_end:
-                    with sim.timers.phase("diagnostics"):
-                        terms = global_terms(sim)
-                        if comm.rank == 0:
-                            rows.append(_row(sim.t, terms, ref))
-                if ckpt.due(at_end):
-                    with sim.timers.phase("output"):
-                        ckpt.write(frames, samples, gsched, gauges, writer, rows, ref)
-                if sim.stop_requested and not at_end:
-                    stopped = True
-                    break
-                now = time.perf_counter()
-                if comm.rank == 0 and not quiet and now - last_log > 2.0:
-                    last_log = now
-                    _progress(sim, now - t0, rows, log, start)
+        while sim.t < sim.t_end * (1 - 1e-12):
+            if sim.max_steps and sim.nstep >= sim.max_steps:
+                break
+            sim.step()
+            if first_step is None:
+                # Start-up figure: from the pdfem import to the end of the first step
+                first_step = time.perf_counter() - pdfem.STARTED
+                if comm.rank == 0 and not quiet:
+                    log(f"first step at {first_step:.2f} s after start")
+            at_end = sim.t >= sim.t_end * (1 - 1e-12)
+            if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
+                with sim.timers.phase("output"):
+                    writer.write_frame(sim)
+            if len(gauges) and (gsched.due(sim.t) or at_end):
+                with sim.timers.phase("diagnostics"):
+                    gauges.sample(sim)
+            if samples.due(sim.t) or at_end:
+                with sim.timers.phase("diagnostics"):
+                    terms = global_terms(sim)
+                    if comm.rank == 0:
+                        rows.append(_row(sim.t, terms, ref))
+            if ckpt.due(at_end):
+                with sim.timers.phase("output"):
+                    ckpt.write(frames, samples, gsched, gauges, writer, rows, ref)
+            if sim.stop_requested and not at_end:
+                stopped = True
+                break
+            now = time.perf_counter()
+            if comm.rank == 0 and not quiet and now - last_log > 2.0:
+                last_log = now
+                _progress(sim, now - t0, rows, log, start)
     except SimulationError:
         # Raised on every rank together: the incomplete run file is removed
         writer.close(rows, TERMS, ok=False, gauges=gauges)

@@ -23,6 +23,7 @@ from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
 from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.stable import q4_stable_dt
+from pdfem.memory import trim
 from pdfem.parallel.exchange import owned_grain_cells, rebuild
 from pdfem.store import Batch, Store, core_fields
 from pdfem.timers import Timers
@@ -75,6 +76,8 @@ class Simulation:
             self._build_restart(restart)
         for eff in self.effects:
             eff.setup(self)
+        # The set-up's temporaries are freed: give their pages back to the OS
+        trim()
         self._fail_msg = ""
         self.t, self.nstep = 0.0, 0
         self.du = np.zeros_like(self.store.v)

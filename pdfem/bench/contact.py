@@ -8,8 +8,9 @@ compile or cache load is excluded everywhere. Contact time is the sum of the tim
 contact_detection and contact_forces; the step time is the wall time of ``Simulation.step``.
 The grain-pair candidate search runs at rebuilds, under the migration phase, and is not part
 of the contact figures (the rebuild count is printed). Memory per grain is the growth of the
-resident set size from before the scene is read to after the timed steps, over the grains;
-the peak is that of VmHWM (set-up included).
+resident set size from before the scene is read to after the timed steps (freed heap pages
+returned to the OS first, pdfem.memory.trim), over the grains: what the running simulation
+holds, all in. The peak is that of VmHWM (set-up included).
 """
 
 import gc
@@ -22,6 +23,7 @@ import numpy as np
 from pdfem.bench.beds import bed_scene, inflate_grains
 from pdfem.bench.elements import machine
 from pdfem.kernels.contact import C_ACTIVE
+from pdfem.memory import trim
 
 # Warm-up steps before the timed samples
 WARMUP = 2
@@ -98,7 +100,7 @@ def run_contact(n, repeat, material="elastic"):
     from pdfem.scene import parse_scene
     from pdfem.solver import Simulation
 
-    gc.collect()
+    trim()
     rss0 = rss_bytes()
     peak_ok = reset_peak()
     with tempfile.TemporaryDirectory() as folder:
@@ -119,6 +121,8 @@ def run_contact(n, repeat, material="elastic"):
                                         for col in zip(*samples, strict=True))
     share = statistics.median((s[1] + s[2]) / s[0] for s in samples)
     coord = _coordination(eff, n)
+    # Resident memory after the steps, freed pages returned (what the run holds)
+    trim()
     out = {"grains": n, "elements": int(sim.store.ne_own), "steps": k, "step": step,
            "detection": det, "forces": frc, "elements_s": elem, "contact": det + frc,
            "share": share,

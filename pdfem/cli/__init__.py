@@ -12,7 +12,7 @@ import sys
 
 from pdfem.errors import InputError, SimulationError
 
-COMMANDS = ("run", "prepare", "sweep", "analyse", "export", "material", "bench")
+COMMANDS = ("run", "prepare", "sweep", "analyse", "export", "material", "bench", "study")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -84,7 +84,7 @@ def _pair_normal(ox, oy, otag, k, ebnd, a, b):
     ax = 0.0
     ay = 0.0
     for i in range(k):
-        i1 = (i + 1) % k
+        i1 = i + 1 if i + 1 < k else 0
         # Outward normal x length of the overlap edge i -> i+1
         ex = oy[i1] - oy[i]
         ey = ox[i] - ox[i1]

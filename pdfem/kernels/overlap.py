@@ -149,17 +149,18 @@ def clip_convex(px, py, n, qx, qy, m, ox, oy, otag, wx, wy, wtag):
     if n > ox.shape[0]:
         return -1
     # Ping-pong between the two buffers; start so that the last step writes into ox
-    if m % 2 == 0:
+    if m & 1 == 0:
         _load_subject(px, py, n, ox, oy, otag)
     else:
         _load_subject(px, py, n, wx, wy, wtag)
     k = n
     for j in range(m):
-        j1 = (j + 1) % m
+        # Next vertex of Q (a compare, not an integer division)
+        j1 = j + 1 if j + 1 < m else 0
         # Outward normal of CCW edge j of Q (not normalised: only signs and ratios matter)
         nx = qy[j1] - qy[j]
         ny = qx[j] - qx[j1]
-        if (m - j) % 2 == 0:
+        if (m - j) & 1 == 0:
             k = clip_halfplane(ox, oy, otag, k, qx[j], qy[j], nx, ny, j, wx, wy, wtag)
         else:
             k = clip_halfplane(wx, wy, wtag, k, qx[j], qy[j], nx, ny, j, ox, oy, otag)
@@ -202,7 +203,7 @@ def boundary_normal_sum(ox, oy, otag, k):
     sy = 0.0
     for i in range(k):
         if otag[i, T_SRC] >= 0:
-            i1 = (i + 1) % k
+            i1 = i + 1 if i + 1 < k else 0
             sx += oy[i1] - oy[i]
             sy -= ox[i1] - ox[i]
     return sx, sy

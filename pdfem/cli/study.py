@@ -1,0 +1,214 @@
+"""``pdfem study <name> ...``: studies of the solver.
+
+- ``study accuracy [scene]``: what accuracy costs in time on a shock scene (grid of mesh
+  levels, element rules, safety factors and contact stiffnesses against the finest run;
+  CSV, Pareto figure, the settings for a 5 % answer) and the element's convergence order;
+- ``study convergence``: the element's observed order on a standing elastic wave.
+
+Each study is one entry of :data:`STUDIES`: a function adding its arguments and one running
+it, so another study is one more entry.
+"""
+
+import os
+import shutil
+import tomllib
+
+from pdfem.errors import InputError
+
+DEFAULT_STUDY_SCENE = "shot912_small.toml"
+# Meshes of the convergence order printed after the accuracy study
+CONVERGENCE_SIZES = (8, 16, 32)
+
+
+def _numbers(text, option, kind=float):
+    """A comma-separated list of numbers, sorted and without repeats; InputError if bad."""
+    try:
+        vals = sorted({kind(v) for v in text.split(",") if v.strip()})
+    except ValueError:
+        word = "integers" if kind is int else "numbers"
+        raise InputError(f"{option}: not a list of {word}: {text!r}") from None
+    if not vals:
+        raise InputError(f"{option}: empty list")
+    return vals
+
+
+def _check(vals, ok, option, what):
+    """Every value must pass ``ok``; InputError naming the option and the range."""
+    bad = [v for v in vals if not ok(v)]
+    if bad:
+        raise InputError(f"{option}: {bad[0]!r} is not {what}")
+    return vals
+
+
+def _rules(text):
+    """The --rules list: 1pt and/or 2x2, in that order."""
+    from pdfem.study.accuracy import RULES
+
+    names = {v.strip() for v in text.split(",") if v.strip()}
+    bad = sorted(names - set(RULES))
+    if bad or not names:
+        raise InputError(f"--rules: expected 1pt and/or 2x2 (got {text!r})")
+    return [r for r in RULES if r in names]
+
+
+def _baseline(text, rules):
+    """--baseline LEVEL,RULE, or None for auto."""
+    if text == "auto":
+        return None
+    parts = text.split(",")
+    if len(parts) != 2 or not parts[0].strip().isdigit() or parts[1].strip() not in rules:
+        raise InputError(f"--baseline: expected auto or LEVEL,RULE with RULE in --rules "
+                         f"(got {text!r})")
+    return int(parts[0]), parts[1].strip()
+
+
+def _accuracy_args(p):
+    p.add_argument("scene", nargs="?", default=None, help="shock scene with a [shock] table "
+                   f"(default: the packaged {DEFAULT_STUDY_SCENE})")
+    p.add_argument("--levels", default="1,2,3,4", help="grain mesh levels, 6 level^2 quads per "
+                   "grain; multiples of the bed file's level (default 1,2,3,4)")
+    p.add_argument("--rules", default="1pt,2x2", help="element rules (default 1pt,2x2)")
+    p.add_argument("--safety", default="0.9,0.5,0.25", help="time.safety factors; the grid "
+                   "runs at the scene's, the reference at the smallest (default 0.9,0.5,0.25)")
+    p.add_argument("--kn0-scale", default="0.1,1,10", help="factors on the contact stiffness "
+                   "(kn0, ks and the pairs'); 1 = the scene's (default 0.1,1,10)")
+    p.add_argument("--baseline", default="auto", help="LEVEL,RULE around which the safety "
+                   "factor and stiffness vary; auto = the cheapest grid run within --tol")
+    p.add_argument("--tol", type=float, default=0.05, help="accuracy asked of the "
+                   "recommended settings, relative (default 0.05)")
+    p.add_argument("-p", "--prefix", default="study-accuracy", help="writes <prefix>.csv, "
+                   "<prefix>.png and the runs in <prefix>-runs/ (default study-accuracy)")
+    p.add_argument("--force", action="store_true", help="overwrite existing output")
+    p.add_argument("--no-convergence", action="store_true", help="skip the element "
+                   "convergence order printed at the end")
+
+
+def _convergence_args(p):
+    from pdfem.study.convergence import SIZES
+
+    p.add_argument("--sizes", default=",".join(map(str, SIZES)), help="meshes n x n of the "
+                   "block; orders between successive sizes (default "
+                   f"{','.join(map(str, SIZES))})")
+    p.add_argument("--rules", default="1pt,2x2", help="element rules (default 1pt,2x2)")
+
+
+def _scene_path(args):
+    """The scene argument or the packaged small shot-912 scene."""
+    from importlib import resources
+
+    return args.scene or str(resources.files("pdfem") / "scenes" / DEFAULT_STUDY_SCENE)
+
+
+def _outputs(prefix, force):
+    """Check the CSV, PNG and runs folder of a prefix; return the folder's path."""
+    from pdfem.cli.run import check_output_path
+
+    for ext in (".csv", ".png"):
+        check_output_path(prefix + ext, force, "--prefix")
+    folder = prefix + "-runs"
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise InputError(f"--prefix: {folder} exists and is not a folder")
+    if os.path.isdir(folder) and os.listdir(folder) and not force:
+        raise InputError(f"--prefix: {folder} holds files (use --force to overwrite)")
+    return folder
+
+
+def _accuracy(args):
+    from pdfem.parallel.mpi import world
+    from pdfem.scene import load_scene
+    from pdfem.study import accuracy as acc
+    from pdfem.study import pareto
+
+    comm = world()
+    # Options
+    levels = _check(_numbers(args.levels, "--levels", int), lambda v: 1 <= v <= 10,
+                    "--levels", "a level in [1, 10]")
+    rules = _rules(args.rules)
+    safeties = _check(_numbers(args.safety, "--safety"), lambda v: 0.0 < v <= 1.0,
+                      "--safety", "a safety factor in (0, 1]")
+    scales = _check(_numbers(args.kn0_scale, "--kn0-scale"), lambda v: v > 0.0,
+                    "--kn0-scale", "a factor > 0")
+    base_given = _baseline(args.baseline, rules)
+    if not 0.0 < args.tol < 1.0:
+        raise InputError(f"--tol: must be in (0, 1) (got {args.tol!r})")
+    # The scene: a shock scene, its dict for the edits
+    path = _scene_path(args)
+    scene = load_scene(path)
+    if "shock" not in scene.resolved:
+        raise InputError(f"{path}: shock: the accuracy study needs a scene with a [shock] table")
+    if "contact" not in scene.resolved and scales != [1.0]:
+        raise InputError(f"{path}: contact: --kn0-scale needs a scene with a [contact] table")
+    with open(path, "rb") as fh:
+        doc = tomllib.load(fh)
+    folder = _outputs(args.prefix, args.force)
+    study = acc.AccuracyStudy(doc, scene, folder, comm)
+    study.check_levels(levels)
+    if base_given and base_given[0] not in levels:
+        raise InputError(f"--baseline: level {base_given[0]} is not in --levels")
+    # The runs folder, emptied of an earlier study's files with --force
+    if comm.rank == 0:
+        if os.path.isdir(folder) and args.force:
+            shutil.rmtree(folder)
+        os.makedirs(folder, exist_ok=True)
+    comm.Barrier()
+    rows = study.run_all(levels, rules, safeties, scales, args.tol, base_given)
+    # The files, the table and the recommendation
+    if comm.rank == 0:
+        from pdfem.study.plots import accuracy_plot
+
+        pareto.write_csv(rows, args.prefix + ".csv")
+        accuracy_plot(rows, args.tol, args.prefix + ".png")
+        print("", *pareto.table_lines(rows), "", sep="\n")
+        print("errors in % against the reference; * = on the Pareto front of worst error "
+              "versus wall time")
+        print(pareto.reference_line(rows[0]))
+        print(pareto.recommendation_line(rows, args.tol,
+                                         scene.resolved.get("contact", {}).get("kn0")))
+        print(f"pdfem study accuracy: {args.prefix}.csv, {args.prefix}.png, runs in "
+              f"{folder}/; {sum(r['wall_s'] for r in rows):.0f} s of runs", flush=True)
+    comm.Barrier()
+    if not args.no_convergence:
+        _print_convergence(comm, CONVERGENCE_SIZES, rules)
+    return 0
+
+
+def _print_convergence(comm, sizes, rules):
+    """The element's convergence order, computed serially on rank 0."""
+    from pdfem.study.convergence import observed_orders, report_lines
+
+    if comm.rank == 0:
+        print("\n".join(report_lines(observed_orders(sizes, rules))), flush=True)
+    comm.Barrier()
+
+
+def _convergence(args):
+    from pdfem.parallel.mpi import world
+
+    sizes = _check(_numbers(args.sizes, "--sizes", int), lambda v: 2 <= v <= 512,
+                   "--sizes", "a mesh size in [2, 512]")
+    if len(sizes) < 2:
+        raise InputError("--sizes: need at least two meshes for an order")
+    _print_convergence(world(), sizes, _rules(args.rules))
+    return 0
+
+
+# Study name -> (help, add its arguments, run it)
+STUDIES = {
+    "accuracy": ("what accuracy costs in time on a shock scene: mesh level, element rule, "
+                 "safety factor and contact stiffness against the finest run",
+                 _accuracy_args, _accuracy),
+    "convergence": ("observed convergence order of the element on a standing elastic wave",
+                    _convergence_args, _convergence),
+}
+
+
+def add_parser(sub):
+    p = sub.add_parser("study", help="studies of the solver: accuracy (accuracy against "
+                       "cost on a shock scene), convergence (element order)")
+    studies = p.add_subparsers(dest="study", metavar="STUDY", required=True)
+    for name, (text, add_args, _) in STUDIES.items():
+        add_args(studies.add_parser(name, help=text, description=text))
+
+
+def run(args):
+    return STUDIES[args.study][2](args)

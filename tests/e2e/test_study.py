@@ -1,0 +1,78 @@
+"""``pdfem study``: a tiny accuracy study on 2 ranks through the real command line, the
+convergence study, and bad input (one line, exit status 2)."""
+
+import csv
+import re
+
+import pytest
+
+from tests.e2e.test_cli import pdfem
+from tests.scenes import drifting_grains
+
+COLUMNS = ["run", "axis", "level", "quads_per_grain", "rule", "safety", "kn0_scale", "wall_s",
+           "steps", "us", "arrival", "hammer_peak", "packing", "err_us", "err_arrival",
+           "err_hammer_peak", "err_packing", "err_max", "pareto", "status", "run_file"]
+
+
+def test_tiny_accuracy_study_on_2_ranks(tmp_path):
+    # The packaged small shot-912 scene (the default), levels 1 and 2 only
+    args = ["study", "accuracy", "--levels", "1,2", "--rules", "1pt,2x2", "--safety",
+            "0.5,0.9", "--kn0-scale", "1", "-p", "acc"]
+    p = pdfem(args, tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    rows = list(csv.DictReader((tmp_path / "acc.csv").open()))
+    assert list(rows[0]) == COLUMNS
+    # The reference first (finest level, 2x2, smallest safety), exact against itself
+    ref = rows[0]
+    assert (ref["run"], ref["axis"], ref["status"]) == ("L2-2x2-s0.5-k1", "reference", "ok")
+    assert all(float(ref[c]) == 0.0 for c in COLUMNS if c.startswith("err_"))
+    assert ref["pareto"] == "1"
+    # The level x rule grid (the reference is its L2-2x2), then the safety 0.9 at the baseline
+    assert sorted(r["run"] for r in rows if r["axis"] == "grid") == [
+        "L1-1pt-s0.5-k1", "L1-2x2-s0.5-k1", "L2-1pt-s0.5-k1"]
+    assert [r["axis"] for r in rows[4:]] == ["safety"] and rows[4]["safety"] == "0.9"
+    for r in rows:
+        assert float(r["wall_s"]) > 0 and r["status"] == "ok"
+        assert (tmp_path / r["run_file"]).is_file()
+    # Figure, table, recommendation, convergence orders
+    assert (tmp_path / "acc.png").read_bytes()[:4] == b"\x89PNG"
+    assert "| run | quads/grain | rule |" in p.stdout
+    assert "for a 5 % answer choose level" in p.stdout
+    assert re.search(r"observed order in h \(finest pair\): 1pt \d\.\d\d, 2x2 \d\.\d\d",
+                     p.stdout)
+    # No overwriting without --force
+    again = pdfem(args + ["--no-convergence"], tmp_path)
+    assert again.returncode == 2 and len(again.stderr.strip().splitlines()) == 1
+    assert "--prefix: acc.csv exists" in again.stderr
+
+
+def test_convergence_study_prints_orders(tmp_path):
+    p = pdfem(["study", "convergence", "--sizes", "4,8"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    orders = re.search(r"1pt (\d\.\d\d), 2x2 (\d\.\d\d) \(expected 2\)", p.stdout)
+    assert orders and all(1.7 < float(o) < 2.3 for o in orders.groups())
+
+
+BAD = {
+    "missing scene": (["nowhere.toml"], "nowhere.toml: cannot read the scene file"),
+    "no shock table": (["plain.toml"], "needs a scene with a [shock] table"),
+    "bad level list": (["--levels", "1,x"], "--levels: not a list of integers"),
+    "level out of range": (["--levels", "0,2"], "--levels: 0 is not a level in [1, 10]"),
+    "bad rule": (["--rules", "3x3"], "--rules: expected 1pt and/or 2x2"),
+    "bad safety": (["--safety", "0.5,1.5"], "--safety: 1.5 is not a safety factor"),
+    "bad stiffness": (["--kn0-scale", "0,1"], "--kn0-scale: 0.0 is not a factor > 0"),
+    "bad baseline": (["--baseline", "2"], "--baseline: expected auto or LEVEL,RULE"),
+    "bad tol": (["--tol", "5"], "--tol: must be in (0, 1)"),
+    "no study": (None, "the following arguments are required: STUDY"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BAD))
+def test_bad_study_input(tmp_path, case):
+    extra, msg = BAD[case]
+    (tmp_path / "plain.toml").write_text(drifting_grains(n=2, end=1e-7))
+    args = ["study"] if extra is None else ["study", "accuracy"] + extra
+    p = pdfem(args, tmp_path)
+    assert p.returncode == 2, p.stderr
+    assert msg in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert not (tmp_path / "study-accuracy-runs").exists()

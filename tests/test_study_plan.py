@@ -1,0 +1,64 @@
+"""The accuracy study's plan, contact scaling, errors, Pareto front and recommendation."""
+
+import math
+
+from pdfem.study import accuracy as acc
+from pdfem.study.pareto import add_errors, mark_pareto, recommend, recommendation_line
+
+KEYS = ("us", "arrival", "hammer_peak", "packing")
+
+
+def test_plan_reference_grid_and_axes():
+    ref = acc.reference_setting([1, 2, 3], ["1pt", "2x2"], [0.9, 0.5, 0.25])
+    assert ref.key == (3, "2x2", 0.25, 1.0) and ref.label == "L3-2x2-s0.25-k1"
+    assert ref.quads == 54
+    grid = acc.grid_settings([1, 2], ["1pt", "2x2"], 0.5)
+    assert [s.label for s in grid] == ["L1-1pt-s0.5-k1", "L1-2x2-s0.5-k1", "L2-1pt-s0.5-k1",
+                                       "L2-2x2-s0.5-k1"]
+    axes = acc.axis_settings(grid[2], [0.25, 0.5, 0.9], [0.1, 1.0, 10.0])
+    assert [(s.axis, s.safety, s.kn0_scale) for s in axes] == [
+        ("safety", 0.25, 1.0), ("safety", 0.9, 1.0), ("kn0", 0.5, 0.1), ("kn0", 0.5, 10.0)]
+    # A grid point equal to the reference runs once, as the reference
+    again = acc.unique([acc.Setting(2, "2x2", 0.5, 1.0, "reference")] + grid)
+    assert len(again) == 4 and again[0].axis == "reference"
+
+
+def test_scale_contact_scales_every_given_stiffness():
+    doc = {"contact": {"kn0": 1e16, "delta_max": 3e-5,
+                       "pairs": {"a:b": {"kn0": 2e16, "ks": 1e16}, "a:c": {"friction": 0.1}}}}
+    acc.scale_contact(doc, 0.1)
+    assert doc["contact"]["kn0"] == 1e15 and "ks" not in doc["contact"]
+    assert doc["contact"]["delta_max"] == 3e-5
+    assert doc["contact"]["pairs"]["a:b"] == {"kn0": 2e15, "ks": 1e15}
+    assert doc["contact"]["pairs"]["a:c"] == {"friction": 0.1}
+
+
+def _row(label, wall, vals, axis="grid"):
+    lv, rule, s, k = label.split("-")
+    st = acc.Setting(int(lv[1:]), rule, float(s[1:]), float(k[1:]), axis)
+    return {"setting": st, "wall_s": wall, "steps": 1, "status": "ok", "run_file": "",
+            **dict(zip(KEYS, vals, strict=True))}
+
+
+def test_errors_pareto_and_the_choice():
+    ref = _row("L3-2x2-s0.25-k1", 100.0, (1000.0, 1e-6, 3e8, 0.99), "reference")
+    rows = [ref,
+            _row("L1-1pt-s0.5-k1", 1.0, (600.0, 1e-6, 3e8, 0.99)),     # 40 % off, cheapest
+            _row("L1-2x2-s0.5-k1", 2.0, (1030.0, 1e-6, 3e8, 0.99)),    # 3 %
+            _row("L2-1pt-s0.5-k1", 3.0, (1040.0, 1e-6, 3e8, 0.99)),    # 4 %, dearer: off front
+            _row("L2-2x2-s0.5-k1", 5.0, (1000.0, 1e-6, 2.97e8, 0.99)),  # 1 %
+            _row("L2-2x2-s0.5-k10", 9.0, (math.nan, 1e-6, 3e8, 0.99))]  # no Us: never chosen
+    add_errors(rows, ref)
+    assert ref["err_max"] == 0.0 and all(ref["err_" + k] == 0.0 for k in KEYS)
+    assert rows[2]["err_us"] == 0.03 and math.isinf(rows[5]["err_max"])
+    mark_pareto(rows)
+    assert [r["setting"].label for r in rows if r["pareto"]] == [
+        "L3-2x2-s0.25-k1", "L1-1pt-s0.5-k1", "L1-2x2-s0.5-k1", "L2-2x2-s0.5-k1"]
+    assert recommend(rows, 0.05)["setting"].label == "L1-2x2-s0.5-k1"
+    assert recommend(rows, 0.02)["setting"].label == "L2-2x2-s0.5-k1"
+    assert recommend(rows, 0.001) is None
+    assert "choose level 1 (6 quads per grain), rule 2x2" in recommendation_line(rows, 0.05)
+    assert "no cheaper run" in recommendation_line(rows, 0.001)
+    # The baseline of the axes: the cheapest grid run within the tolerance
+    assert acc.baseline(rows, 0.05).label == "L1-2x2-s0.5-k1"
+    assert acc.baseline(rows, 0.001).label == "L2-2x2-s0.5-k1"

@@ -273,7 +273,8 @@ def _bbox_scale2(xa):
 
 @njit(cache=True)
 def _outside_edge(xa, xb):
-    """True when every corner of xb lies strictly outside one edge line of the CCW quad xa."""
+    """True when every corner of xb lies strictly outside one edge line of the CCW quad xa
+    (n.(p - a_j) > 0 with the clip's own formula, clip_halfplane)."""
     for j in range(4):
         j1 = (j + 1) % 4
         # Outward normal of edge j, and the corners' signed distances (scaled)
@@ -301,8 +302,10 @@ def quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag):
     2 distinct crossings: one element contains the other, the caller treats it as an error);
     OV_OVERFLOW.
     """
-    # Separating axis first: an edge line of either quad with the other wholly outside
-    if _outside_edge(xb, xa) or _outside_edge(xa, xb):
+    # Early out: A wholly outside an edge line of B, so the first clip by that line would
+    # leave nothing (exactly what the clip finds; the converse test is not used: it is only
+    # valid for a convex A, and a distorted element need not be convex)
+    if _outside_edge(xb, xa):
         return OV_NONE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
     k = clip_convex(xa[:, 0], xa[:, 1], 4, xb[:, 0], xb[:, 1], 4, ox, oy, otag, wx, wy, wtag)
     st, area, cx, cy, c1x, c1y, c2x, c2y = _classify(ox, oy, otag, k, _bbox_scale2(xa))

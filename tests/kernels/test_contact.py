@@ -579,3 +579,19 @@ def test_rigid_collision_restitution_and_friction_balance():
         v, ke, diss = collide(1.0, (0, 1, 0, 0), (0, 0, 0, 1), 0.2, 0.5, int(0.018 / dt), dt, 3.0)
         assert diss > 0.1 and v[0, 0] == pytest.approx(-1.0, abs=1e-3)
         assert 1.25 - ke == pytest.approx(diss, rel=1e-3)
+
+
+def test_early_out_keeps_the_clips_answer_for_a_non_convex_element():
+    # B lies wholly outside one edge line of the dart-shaped A, yet inside A: the clip (A by
+    # B's lines) finds the overlap, and the early out must not hide it
+    from pdfem.kernels.overlap import _outside_edge
+
+    xa = np.array([[0.0, 0.0], [4.0, 0.0], [2.0, 1.0], [2.0, 3.0]])
+    xb = np.array([[3.0544705, 0.6247629], [2.8157275, 0.85142066],
+                   [2.58906975, 0.61267766], [2.82781274, 0.38601991]])
+    assert _outside_edge(xa, xb)
+    st = O.quad_overlap(xa, xb, *O.alloc_clip_buffers())
+    assert st[0] != O.OV_NONE and st[1] > 0.04
+    # Far apart: the early out answers, with the clip's result (no overlap)
+    st = O.quad_overlap(xa, xb + 10.0, *O.alloc_clip_buffers())
+    assert st[0] == O.OV_NONE and st[1] == 0.0

@@ -30,9 +30,9 @@ import numpy as np
 from numba import njit
 
 from pdfem.kernels.elastic import elastic_energy_density
-from pdfem.kernels.element_elastic import q4_forces_1pt_elastic
+from pdfem.kernels.element_fast import q4_forces_1pt_fast
 from pdfem.kernels.material import material_update, softened
-from pdfem.kernels.params import ALPHA, BULK, ELASTIC, MODEL, RHO, SHEAR, SOFT_K, SOFT_Y
+from pdfem.kernels.params import ALPHA, BULK, CAP, ELASTIC, MODEL, RHO, SHEAR, SOFT_K, SOFT_Y
 
 GP = 0.5773502691896257  # 1/sqrt(3), 2x2 Gauss abscissa
 XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
@@ -199,10 +199,11 @@ def _scatter(conn, e, fe, f):
 
 
 @njit(cache=True)
-def _all_elastic(mat_params):
-    """True when every material row is the elastic model."""
+def _fast_models(mat_params):
+    """True when every material row is the elastic or the cap model (element_fast)."""
     for m in range(mat_params.shape[0]):
-        if int(mat_params[m, MODEL]) != ELASTIC:
+        model = int(mat_params[m, MODEL])
+        if model != ELASTIC and model != CAP:
             return False
     return True
 
@@ -219,10 +220,10 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
     """
     if sig.shape[1] != 1:
         raise ValueError("q4_forces_1pt needs sig of shape (ne, 1, 4)")
-    # Elastic materials only, no state, no heat: the scalar fast path (bit-identical)
-    if mstate.shape[2] == 0 and eth.shape[0] == 0 and _all_elastic(mat_params):
-        return q4_forces_1pt_elastic(x, du, conn, emat, mat_params, sig, hgq, hg_coef, e0, e1,
-                                     f, ewint)
+    # Elastic and cap materials, no heat: the scalar fast path (bit-identical)
+    if eth.shape[0] == 0 and _fast_models(mat_params):
+        return q4_forces_1pt_fast(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0,
+                                  e1, f, ewint, ewp)
     # Scratch buffers, allocated once per call
     xc = np.empty((4, 2))
     xm = np.empty((4, 2))

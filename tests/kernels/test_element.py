@@ -292,7 +292,7 @@ def test_jacobian_ratio():
 
 @pytest.mark.parametrize("hg", [True, False])
 def test_elastic_fast_path_is_bit_identical_to_the_general_kernel(hg):
-    # A second (unused) cap row sends q4_forces_1pt down its general path
+    # A second (unused) row of an unknown model sends q4_forces_1pt down its general path
     x, conn = grid(12, 9, 0.2, 3)
     ne = conn.shape[0]
     rng = np.random.default_rng(8)
@@ -301,11 +301,41 @@ def test_elastic_fast_path_is_bit_identical_to_the_general_kernel(hg):
     hg0 = rng.uniform(-10.0, 10.0, (ne, 2)) if hg else np.zeros((0, 2))
     emat = np.zeros(ne, np.int32)
     out = []
-    for mat in (material(), np.concatenate([material(), material(CAP)])):
+    for mat in (material(), np.concatenate([material(), material(UNKNOWN_MODEL)])):
         sig, hgq, f, ew = sig0.copy(), hg0.copy(), np.zeros_like(x), np.zeros(ne)
         bad = q4_forces_1pt(x + du, du, conn, emat, mat, sig, np.zeros((ne, 1, 0)), hgq, HGC, 0,
                             ne, f, ew, np.zeros(ne), np.zeros((0, 3)))
         assert bad == -1
         out.append((sig, hgq, f, ew))
     for a, b in zip(*out, strict=True):
+        assert np.array_equal(a, b)
+
+
+def test_cap_fast_path_is_bit_identical_to_the_general_kernel_while_yielding():
+    # Cap and elastic elements squeezed call after call until most cap points yield; the
+    # general path (forced by an unused row of an unknown model) must match bit for bit
+    from pdfem.bench.cap_yardstick import hmx_params, squeeze
+    from pdfem.kernels.cap import CAP_NST
+    from pdfem.kernels.material import material_initial_state
+
+    x0, conn = grid(16, 12, 0.2, 5)
+    ne = conn.shape[0]
+    emat = (np.arange(ne) % 5 == 0).astype(np.int32)  # every fifth element elastic
+    fast = np.concatenate([hmx_params(), material()])
+    general = np.concatenate([fast, material(UNKNOWN_MODEL)])
+    dstep = squeeze(x0 * 1e-4, 2.0e-3, 4.0e-3)
+    state = {}
+    for name, mat in (("fast", fast), ("general", general)):
+        x = x0 * 1e-4
+        sig, mst = np.zeros((ne, 1, 4)), np.zeros((ne, 1, CAP_NST))
+        material_initial_state(mst, emat, mat)
+        hgq, ew, ewp = np.zeros((ne, 2)), np.zeros(ne), np.zeros(ne)
+        for _ in range(12):
+            x = x + dstep
+            f = np.zeros_like(x)
+            assert q4_forces_1pt(x, dstep, conn, emat, mat, sig, mst, hgq, HGC, 0, ne, f, ew,
+                                 ewp, np.zeros((0, 3))) == -1
+        state[name] = (sig, mst, hgq, f, ew, ewp)
+    assert (state["fast"][5] > 0).mean() > 0.3  # many points did plastic work
+    for a, b in zip(state["fast"], state["general"], strict=True):
         assert np.array_equal(a, b)

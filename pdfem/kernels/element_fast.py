@@ -1,17 +1,23 @@
-"""The 1-point quad with hourglass control for elastic materials: the fast path.
+"""The 1-point quad with hourglass control, fast path: elastic and cap materials, no heat.
 
 The same algorithm as ``pdfem.kernels.element.q4_forces_1pt`` (see that module for the
-equations), operation for operation, specialised to isotropic hypo-elastic materials without
-internal state or thermal coupling: every quantity of an element lives in scalar locals (no
-scratch arrays, no material dispatch), which lets LLVM keep them in registers. The general
-kernel calls it when every row of the material table is elastic; the two give bit-identical
-results (tests/kernels/test_element.py). Sign convention: tension positive.
+equations), operation for operation, specialised to the elastic and Sandler-Rubin cap models
+without thermal coupling: every quantity of an element lives in scalar locals (no scratch
+arrays, no material dispatch through arrays), which lets LLVM keep them in registers. A cap
+point first takes the elastic trial and its yield value exactly as ``cap.cap_update`` does and
+only calls the plastic return when the trial is outside. The general kernel calls this one
+when every row of the material table is elastic or cap and heat is off; the two give
+bit-identical results (tests/kernels/test_element.py). Sign convention: tension positive.
 """
+
+import math
 
 from numba import njit
 
+from pdfem.kernels.cap import _plastic_update
+from pdfem.kernels.cap_surface import yield_value
 from pdfem.kernels.elastic import elastic_increment
-from pdfem.kernels.params import BULK, SHEAR
+from pdfem.kernels.params import BULK, CAP, MODEL, SHEAR
 
 
 @njit(cache=True)
@@ -36,12 +42,14 @@ def _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1, by2, by
 
 
 @njit(cache=True)
-def q4_forces_1pt_elastic(x, du, conn, emat, mat_params, sig, hgq, hg_coef, e0, e1, f, ewint):
-    """q4_forces_1pt for elastic materials (no state, no heat) on elements [e0, e1).
+def q4_forces_1pt_fast(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1, f,
+                       ewint, ewp):
+    """q4_forces_1pt for elastic and cap materials without heat on elements [e0, e1).
 
-    Updates sig (ne,1,4) and hgq (ne,2) (shape (0, 2): no hourglass control) in place,
-    subtracts the internal forces from f, adds stress and hourglass work to ewint. Returns
-    -1, or the first element with a non-positive (mid-step or current) area.
+    Updates sig (ne,1,4), mst (ne,1,nst) and hgq (ne,2) (shape (0, 2): no hourglass control)
+    in place, subtracts the internal forces from f, adds stress and hourglass work to ewint
+    and plastic work to ewp. Returns -1, or the first element with a non-positive (mid-step
+    or current) area, a non-finite cap input or a failed cap return.
     """
     has_hg = hgq.shape[0] > 0
     for e in range(e0, e1):
@@ -72,7 +80,7 @@ def q4_forces_1pt_elastic(x, du, conn, emat, mat_params, sig, hgq, hg_coef, e0, 
         d = 1.0 / (1.0 + 0.25 * w * w)
         c = (1.0 - 0.25 * w * w) * d
         sn = w * d
-        # Rotate the stress (Cayley), add the elastic increment, trapezoidal work density
+        # Rotate the stress (Cayley), update it, trapezoidal work density
         s = sig[e, 0]
         sxx, syy, sxy = s[0], s[1], s[2]
         r0 = c * c * sxx + 2.0 * c * sn * sxy + sn * sn * syy
@@ -80,9 +88,36 @@ def q4_forces_1pt_elastic(x, du, conn, emat, mat_params, sig, hgq, hg_coef, e0, 
         r2 = c * sn * (syy - sxx) + (c * c - sn * sn) * sxy
         r3 = s[3]
         d0, d1, d2, d3 = gxx - 0.0, gyy - 0.0, 0.5 * (gxy + gyx), -0.0
-        i0, i1, i2, i3 = elastic_increment(p, d0, d1, d2, d3)
-        t0, t1, t2, t3 = r0 + i0, r1 + i1, r2 + i2, r3 + i3
-        s[0], s[1], s[2], s[3] = t0, t1, t2, t3
+        dwp = 0.0
+        if int(p[MODEL]) == CAP:
+            # Cap: the elastic trial and its yield value as cap.cap_update computes them
+            st = mst[e, 0]
+            if not (math.isfinite(d0 + d1 + d2 + d3)
+                    and math.isfinite(r0 + r1 + r2 + r3 + st[0])):
+                return e
+            g2 = 2.0 * p[SHEAR]
+            lam = p[BULK] - g2 / 3.0
+            dv = d0 + d1 + d3
+            t0, t1 = r0 + (lam * dv + g2 * d0), r1 + (lam * dv + g2 * d1)
+            t2, t3 = r2 + g2 * d2, r3 + (lam * dv + g2 * d3)
+            i1t = t0 + t1 + t3
+            mm = i1t / 3.0
+            jt = math.sqrt(0.5 * ((t0 - mm) ** 2 + (t1 - mm) ** 2 + (t3 - mm) ** 2) + t2 * t2)
+            over = yield_value(p, i1t, jt, st[0])
+            if over <= 0.0:
+                s[0], s[1], s[2], s[3] = t0, t1, t2, t3
+            else:
+                # Outside: the plastic return from the rotated stress
+                s[0], s[1], s[2], s[3] = r0, r1, r2, r3
+                status, dwp = _plastic_update(p, s, st, d0, d1, d2, d3, over)
+                if status != 0:
+                    return e
+                t0, t1, t2, t3 = s[0], s[1], s[2], s[3]
+        else:
+            # Elastic
+            i0, i1, i2, i3 = elastic_increment(p, d0, d1, d2, d3)
+            t0, t1, t2, t3 = r0 + i0, r1 + i1, r2 + i2, r3 + i3
+            s[0], s[1], s[2], s[3] = t0, t1, t2, t3
         wk = 0.5 * ((r0 + t0) * d0 + (r1 + t1) * d1 + 2.0 * (r2 + t2) * d2 + (r3 + t3) * d3)
         # Hourglass displacement increment at mid-step
         dq0 = 0.0
@@ -98,6 +133,7 @@ def q4_forces_1pt_elastic(x, du, conn, emat, mat_params, sig, hgq, hg_coef, e0, 
         if a <= 0.0:
             return e
         ewint[e] += wk * a
+        ewp[e] += dwp * a
         # Stress divergence forces f_I = A sig . b_I
         fx0, fy0 = a * (t0 * bx0 + t2 * by0), a * (t2 * bx0 + t1 * by0)
         fx1, fy1 = a * (t0 * bx1 + t2 * by1), a * (t2 * bx1 + t1 * by1)

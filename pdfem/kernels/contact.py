@@ -50,7 +50,7 @@ from pdfem.kernels.overlap import (
     alloc_clip_buffers,
     element_corners,
     halfplane_overlap,
-    quad_overlap,
+    quad_overlap_area,
 )
 
 # Columns of res[p, :]
@@ -217,7 +217,7 @@ def element_pair_forces(
             a, b = b, a
         element_corners(x, conn, a, xa)
         element_corners(x, conn, b, xb)
-        st, area, cx, cy, _, _, _, _, k = quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag)
+        st, area, cx, cy, k = quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag)
         if st == OV_NONE:
             _clear(p, 0.0, active, nodes, weights, fa, us_out, res, C_NONE)
             continue

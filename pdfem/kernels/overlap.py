@@ -313,6 +313,40 @@ def quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag):
 
 
 @njit(cache=True)
+def _distinct_crossings(ox, oy, otag, k):
+    """True when the polygon has two crossing vertices at different points (the test of
+    _classify's chord, without finding the farthest pair or orienting it)."""
+    first = -1
+    for i in range(k):
+        if otag[i, T_KIND] != K_X:
+            continue
+        if first < 0:
+            first = i
+        elif ox[i] != ox[first] or oy[i] != oy[first]:
+            return True
+    return False
+
+
+@njit(cache=True)
+def quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag):
+    """quad_overlap without the chord: (status, area, cx, cy, k), the same values.
+
+    For the contact kernel, which needs the status, the overlap polygon and its centroid.
+    """
+    if _outside_edge(xb, xa):
+        return OV_NONE, 0.0, 0.0, 0.0, 0
+    k = clip_convex(xa[:, 0], xa[:, 1], 4, xb[:, 0], xb[:, 1], 4, ox, oy, otag, wx, wy, wtag)
+    if k < 0:
+        return OV_OVERFLOW, 0.0, 0.0, 0.0, k
+    area, cx, cy = polygon_area_centroid(ox, oy, k)
+    if area <= SLIVER * _bbox_scale2(xa):
+        return OV_NONE, 0.0, 0.0, 0.0, k
+    if not _distinct_crossings(ox, oy, otag, k):
+        return OV_INSIDE, area, cx, cy, k
+    return OV_OK, area, cx, cy, k
+
+
+@njit(cache=True)
 def halfplane_overlap(xa, p0, n, ox, oy, otag, wx, wy, wtag):
     """Overlap of the convex CCW quad xa (4, 2) with the wall {p : n.(p - p0) < 0}.
 

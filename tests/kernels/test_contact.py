@@ -595,3 +595,21 @@ def test_early_out_keeps_the_clips_answer_for_a_non_convex_element():
     # Far apart: the early out answers, with the clip's result (no overlap)
     st = O.quad_overlap(xa, xb + 10.0, *O.alloc_clip_buffers())
     assert st[0] == O.OV_NONE and st[1] == 0.0
+
+
+def test_quad_overlap_area_is_quad_overlap_without_the_chord():
+    # Same status, area, centroid and polygon on random pairs, containment and near misses
+    rng = np.random.default_rng(11)
+    buf, buf2 = O.alloc_clip_buffers(), O.alloc_clip_buffers()
+    small = 0.25 * SQ + 0.3
+    cases = [(random_quad(rng), random_quad(rng)) for _ in range(3000)]
+    cases += [(SQ, small), (small, SQ), (SQ, SQ + [2.0, 0.0]), (SQ, SQ + [1.0, 0.5])]
+    seen = set()
+    for p, q in cases:
+        full = O.quad_overlap(p, q, *buf)
+        st, area, cx, cy, k = O.quad_overlap_area(p, q, *buf2)
+        assert (st, area, cx, cy) == (full[0], full[1], full[2], full[3])
+        if st != O.OV_NONE:
+            assert k == full[8] and np.array_equal(buf[0][:k], buf2[0][:k])
+        seen.add(st)
+    assert {O.OV_OK, O.OV_NONE, O.OV_INSIDE} <= seen

@@ -84,8 +84,10 @@ def _start(args, cwd):
 def test_sigterm_checkpoints_and_the_restart_continues_the_run_file(tmp_path, reference):
     scene = _bed(tmp_path, 4000)
     proc = _start(["run", scene, "-o", "c.h5", "--quiet"], tmp_path)
+    # The handler is in place before the run file appears; a short wait lets a few steps run
+    # (the whole run takes about a second: a longer wait could miss it)
     _wait_for(tmp_path / "c.h5.part")
-    time.sleep(1.0)
+    time.sleep(0.1)
     proc.send_signal(signal.SIGTERM)
     out, err = proc.communicate(timeout=120)
     assert proc.returncode == 0, err

@@ -169,11 +169,13 @@ def _clear(p, us_keep, active, nodes, weights, fa, us_out, res, code):
 
 
 @njit(cache=True)
-def _law(p, area, width, nx, ny, cx, cy, dus, us, par, fa, us_out, res, sg):
-    """Contact law at pair p; writes fa (sign sg: -1 when the caller's A is our B) and res."""
+def _law(p, area, width, nx, ny, cx, cy, dus, us, params, fa, us_out, res, sg):
+    """Contact law at pair p with the parameters params[p] (indexed in place, no row view);
+    writes fa (sign sg: -1 when the caller's A is our B) and res."""
     delta = area / width
-    fn, kn, en = normal_force(delta, width, par[P_KN0], par[P_DMAX], par[P_RCAP])
-    us_new, fs, diss = shear_update(us, dus, width, par[P_KS], par[P_MU], fn)
+    fn, kn, en = normal_force(delta, width, params[p, P_KN0], params[p, P_DMAX],
+                               params[p, P_RCAP])
+    us_new, fs, diss = shear_update(us, dus, width, params[p, P_KS], params[p, P_MU], fn)
     # Force on A: normal (fn <= 0 pushes A back along -n) plus shear along t
     tx = -ny
     ty = nx
@@ -182,9 +184,9 @@ def _law(p, area, width, nx, ny, cx, cy, dus, us, par, fa, us_out, res, sg):
     us_out[p] = us_new
     res[p, R_FN] = fn
     res[p, R_FS] = fs
-    res[p, R_ENERGY] = en + 0.5 * par[P_KS] * width * us_new * us_new
+    res[p, R_ENERGY] = en + 0.5 * params[p, P_KS] * width * us_new * us_new
     res[p, R_DISS] = diss
-    res[p, R_STIFF] = max(kn, par[P_KS] * width)
+    res[p, R_STIFF] = max(kn, params[p, P_KS] * width)
     res[p, R_DELTA] = delta
     res[p, R_WIDTH] = width
     res[p, R_NX] = sg * nx
@@ -245,7 +247,7 @@ def element_pair_forces(
         dbx, dby = _edge_du(du, b1, b2, sb)
         dus = (dbx - dax) * -ny + (dby - day) * nx
         sg = -1.0 if flip else 1.0
-        _law(p, area, width, nx, ny, cx, cy, dus, us_in[p], params[p], fa, us_out, res, sg)
+        _law(p, area, width, nx, ny, cx, cy, dus, us_in[p], params, fa, us_out, res, sg)
         # Nodal layout in the caller's order (a1, a2, b1, b2)
         active[p] = C_ACTIVE
         j = 2 if flip else 0
@@ -311,7 +313,7 @@ def element_wall_forces(
         # Relative increment of the (fixed) wall with respect to the element, along t
         dax, day = _edge_du(du, e1, e2, se)
         dus = -dax * -ny - day * nx
-        _law(p, area, width, nx, ny, cx, cy, dus, us_in[p], params[p], fa, us_out, res, 1.0)
+        _law(p, area, width, nx, ny, cx, cy, dus, us_in[p], params, fa, us_out, res, 1.0)
         active[p] = C_ACTIVE
         nodes[p, 0] = e1
         nodes[p, 1] = e2

@@ -128,11 +128,12 @@ def clip_halfplane(ix, iy, itag, nin, x0, y0, nx, ny, line, ox, oy, otag):
 
 
 @njit(cache=True)
-def _load_subject(px, py, n, ox, oy, otag):
-    """Copy subject polygon P into a tagged buffer (vertex i, edge i -> i+1 has source i)."""
+def _load_subject(pxy, n, ox, oy, otag):
+    """Copy subject polygon P = pxy[:n] (rows x, y) into a tagged buffer (vertex i, edge
+    i -> i+1 has source i)."""
     for i in range(n):
-        ox[i] = px[i]
-        oy[i] = py[i]
+        ox[i] = pxy[i, 0]
+        oy[i] = pxy[i, 1]
         otag[i, T_KIND] = K_P
         otag[i, T_EP] = i
         otag[i, T_EQ] = -1
@@ -140,8 +141,9 @@ def _load_subject(px, py, n, ox, oy, otag):
 
 
 @njit(cache=True)
-def clip_convex(px, py, n, qx, qy, m, ox, oy, otag, wx, wy, wtag):
-    """Intersection of convex CCW polygons P = (px, py)[:n] and Q = (qx, qy)[:m].
+def clip_convex(pxy, n, qxy, m, ox, oy, otag, wx, wy, wtag):
+    """Intersection of convex CCW polygons P = pxy[:n] and Q = qxy[:m] (rows x, y; the
+    (n, 2) arrays are indexed in place: column views cost more than the clip in hot loops).
 
     The tagged result (see module docstring) is left in (ox, oy, otag); (wx, wy, wtag) are work
     buffers of the same size. Returns the vertex count (0: empty, -1: buffer overflow).
@@ -150,20 +152,20 @@ def clip_convex(px, py, n, qx, qy, m, ox, oy, otag, wx, wy, wtag):
         return -1
     # Ping-pong between the two buffers; start so that the last step writes into ox
     if m & 1 == 0:
-        _load_subject(px, py, n, ox, oy, otag)
+        _load_subject(pxy, n, ox, oy, otag)
     else:
-        _load_subject(px, py, n, wx, wy, wtag)
+        _load_subject(pxy, n, wx, wy, wtag)
     k = n
     for j in range(m):
         # Next vertex of Q (a compare, not an integer division)
         j1 = j + 1 if j + 1 < m else 0
         # Outward normal of CCW edge j of Q (not normalised: only signs and ratios matter)
-        nx = qy[j1] - qy[j]
-        ny = qx[j] - qx[j1]
+        nx = qxy[j1, 1] - qxy[j, 1]
+        ny = qxy[j, 0] - qxy[j1, 0]
         if (m - j) & 1 == 0:
-            k = clip_halfplane(ox, oy, otag, k, qx[j], qy[j], nx, ny, j, wx, wy, wtag)
+            k = clip_halfplane(ox, oy, otag, k, qxy[j, 0], qxy[j, 1], nx, ny, j, wx, wy, wtag)
         else:
-            k = clip_halfplane(wx, wy, wtag, k, qx[j], qy[j], nx, ny, j, ox, oy, otag)
+            k = clip_halfplane(wx, wy, wtag, k, qxy[j, 0], qxy[j, 1], nx, ny, j, ox, oy, otag)
         if k <= 0:
             return k
     return k
@@ -307,7 +309,7 @@ def quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag):
     # valid for a convex A, and a distorted element need not be convex)
     if _outside_edge(xb, xa):
         return OV_NONE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    k = clip_convex(xa[:, 0], xa[:, 1], 4, xb[:, 0], xb[:, 1], 4, ox, oy, otag, wx, wy, wtag)
+    k = clip_convex(xa, 4, xb, 4, ox, oy, otag, wx, wy, wtag)
     st, area, cx, cy, c1x, c1y, c2x, c2y = _classify(ox, oy, otag, k, _bbox_scale2(xa))
     return st, area, cx, cy, c1x, c1y, c2x, c2y, k
 
@@ -335,7 +337,7 @@ def quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag):
     """
     if _outside_edge(xb, xa):
         return OV_NONE, 0.0, 0.0, 0.0, 0
-    k = clip_convex(xa[:, 0], xa[:, 1], 4, xb[:, 0], xb[:, 1], 4, ox, oy, otag, wx, wy, wtag)
+    k = clip_convex(xa, 4, xb, 4, ox, oy, otag, wx, wy, wtag)
     if k < 0:
         return OV_OVERFLOW, 0.0, 0.0, 0.0, k
     area, cx, cy = polygon_area_centroid(ox, oy, k)
@@ -355,7 +357,7 @@ def halfplane_overlap(xa, p0, n, ox, oy, otag, wx, wy, wtag):
     that its clockwise normal is -n (from the element into the wall). OV_INSIDE means the whole
     element is behind the wall. Crossings carry T_EQ = 0 (the wall line).
     """
-    _load_subject(xa[:, 0], xa[:, 1], 4, wx, wy, wtag)
+    _load_subject(xa, 4, wx, wy, wtag)
     k = clip_halfplane(wx, wy, wtag, 4, p0[0], p0[1], n[0], n[1], 0, ox, oy, otag)
     st, area, cx, cy, c1x, c1y, c2x, c2y = _classify(ox, oy, otag, k, _bbox_scale2(xa))
     return st, area, cx, cy, c1x, c1y, c2x, c2y, k
@@ -438,11 +440,18 @@ def pairs_from_bboxes(bbox, ebnd, egid, eloc, e0, e1, skin, out):
 
 
 @njit(cache=True)
-def _near_list(bbox, ebnd, e0, e1, box, skin, lst):
-    """Boundary elements of [e0, e1) within skin of box, into lst; return their count."""
+def _rows_near(a, i, b, j, skin):
+    """boxes_near of rows a[i] and b[j], indexed in place (no row views in the hot loops)."""
+    return (a[i, 0] - b[j, 2] <= skin and b[j, 0] - a[i, 2] <= skin
+            and a[i, 1] - b[j, 3] <= skin and b[j, 1] - a[i, 3] <= skin)
+
+
+@njit(cache=True)
+def _near_list(bbox, ebnd, e0, e1, boxes, b, skin, lst):
+    """Boundary elements of [e0, e1) within skin of boxes[b], into lst; return their count."""
     c = 0
     for e in range(e0, e1):
-        if _on_boundary(ebnd, e) and boxes_near(bbox[e], box, skin):
+        if _on_boundary(ebnd, e) and _rows_near(bbox, e, boxes, b, skin):
             lst[c] = e
             c += 1
     return c
@@ -491,11 +500,11 @@ def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, out)
         if egid[body_e0[i]] > egid[body_e0[j]]:
             i, j = j, i
         # Boundary elements of each body near the other body, then all their pairs
-        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], boxes[j], skin, la)
-        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], boxes[i], skin, lb)
+        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], boxes, j, skin, la)
+        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], boxes, i, skin, lb)
         for u in range(na):
             for v in range(nb):
-                if boxes_near(bbox[la[u]], bbox[lb[v]], skin):
+                if _rows_near(bbox, la[u], bbox, lb[v], skin):
                     n = _emit(out, n, la[u], lb[v], egid, eloc)
     return n
 

@@ -231,7 +231,7 @@ class Contact(Effect):
                                        us_in[sl], active[sl], nodes[sl], weights[sl], fa[sl],
                                        us_out[sl], res[sl])
         self._check(sim, keys, active, res, bad)
-        self._apply(sim, keys, active, nodes, weights, fa, res, pairs)
+        self._apply(sim, keys, order, active, nodes, weights, fa, res, pairs)
         self._bookkeeping(sim, keys, order, active, us_out, res, pairs, welems)
         self._last = {"active": active, "nodes": nodes, "res": res, "fa": fa, "keys": keys}
 
@@ -246,16 +246,21 @@ class Contact(Effect):
             other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
             sim.fail(f"contact between body {k[0]} element {k[1]} and {other} is {what}")
 
-    def _apply(self, sim, keys, active, nodes, weights, fa, res, pairs):
-        """Add forces (and contact heat) to owned nodes in key order; block-side rows are
-        gathered from all ranks."""
+    def _apply(self, sim, keys, order, active, nodes, weights, fa, res, pairs):
+        """Add forces (and contact heat) to owned nodes in key order (order sorts keys);
+        block-side rows are gathered from all ranks."""
         s = sim.store
         # Heat of each contact on its two sides (this step, over sim.dt)
         heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and hasattr(sim, "dt")
+        q = None
         if heat:
             q = np.zeros((active.shape[0], 2))
             contact_heat(active, nodes, weights, res, s.T, self.heat_h, self.heat_fraction,
                          sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1])
+        # No blocks: every contact is local, already sorted
+        if sim.nglobal == 0:
+            self._add(sim, order, active, nodes, weights, fa, q)
+            return
         npair = pairs.shape[0]
         isg = s.isglobal[s.elem_body]
         mixed = np.zeros(active.shape[0], bool)
@@ -268,21 +273,25 @@ class Contact(Effect):
         qsel = q[sel] if heat else np.zeros((sel.shape[0], 2))
         rows = np.concatenate([keys[sel], nodes[sel], weights[sel], fa[sel], qsel], axis=1)
         rows[:, 4:6] = -1
-        if sim.nglobal == 0:
-            got = rows
-        else:
-            got = allgather_rows(sim.comm, rows) if sim.comm.size > 1 else rows
+        got = allgather_rows(sim.comm, rows) if sim.comm.size > 1 else rows
+        if got.shape[0] == 0:
+            self._add(sim, order, active, local_nodes, weights, fa, q)
+            return
         k_all = np.concatenate([keys, got[:, 0:4].astype(np.int64)])
         n_all = np.concatenate([local_nodes, got[:, 4:8].astype(np.int64)])
         w_all = np.concatenate([weights, got[:, 8:12]])
         f_all = np.concatenate([fa, got[:, 12:14]])
         a_all = np.concatenate([active, np.full(got.shape[0], C_ACTIVE, np.int8)])
-        order = _lexorder(k_all)
-        accumulate_sorted(order, a_all, n_all, w_all, f_all, s.nn_own, sim.f)
-        if heat:
-            q_all = np.concatenate([q, got[:, 14:16]])
-            accumulate_heat_sorted(order, a_all, n_all, w_all, q_all[:, 0], q_all[:, 1],
-                                   s.nn_own, sim.heat.src)
+        q_all = np.concatenate([q, got[:, 14:16]]) if heat else None
+        self._add(sim, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all)
+
+    def _add(self, sim, order, active, nodes, weights, fa, q):
+        """Forces (and heat, q not None) of the contacts in the given order to owned nodes."""
+        s = sim.store
+        accumulate_sorted(order, active, nodes, weights, fa, s.nn_own, sim.f)
+        if q is not None:
+            accumulate_heat_sorted(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own,
+                                   sim.heat.src)
 
     def _bookkeeping(self, sim, keys, order, active, us_out, res, pairs, welems):
         """New history table; contact energy and friction per body of side A (counted once)."""

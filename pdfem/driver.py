@@ -120,8 +120,7 @@ def _run(sim, out_path, quiet, log):
                "balance_error": rows[-1][-1] if rows else None, "stopped": stopped,
                "checkpoint": ckpt.path if stopped else None,
                "phases": report, "effects": sim.effect_names, "ranks": comm.size,
-               "imbalance": sim.timers.imbalance(comm), "rebalances": sim.rebalances,
-               "first_step_s": first_step}
+               "imbalance": sim.timers.imbalance(comm), "rebalances": sim.rebalances}
     if comm.rank == 0 and not quiet:
         _report(summary, log)
     return summary

@@ -108,8 +108,3 @@ def load(name="q4_1pt"):
     if path is None:
         return None
     return makers[name](ctypes.CDLL(path))
-
-
-def load_2x2_cap():
-    """``load("q4_2x2_cap")``: the C twin of q4_forces_2x2 for cap materials (or None)."""
-    return load("q4_2x2_cap")

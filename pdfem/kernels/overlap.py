@@ -304,13 +304,11 @@ def quad_overlap(xa, xb, ox, oy, otag, wx, wy, wtag):
     2 distinct crossings: one element contains the other, the caller treats it as an error);
     OV_OVERFLOW.
     """
-    # Early out: A wholly outside an edge line of B, so the first clip by that line would
-    # leave nothing (exactly what the clip finds; the converse test is not used: it is only
-    # valid for a convex A, and a distorted element need not be convex)
-    if _outside_edge(xb, xa):
-        return OV_NONE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0
-    k = clip_convex(xa, 4, xb, 4, ox, oy, otag, wx, wy, wtag)
-    st, area, cx, cy, c1x, c1y, c2x, c2y = _classify(ox, oy, otag, k, _bbox_scale2(xa))
+    st, area, cx, cy, k = quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag)
+    if st != OV_OK and st != OV_INSIDE:
+        return st, area, cx, cy, 0.0, 0.0, 0.0, 0.0, k
+    # The chord, oriented from A into B
+    _, c1x, c1y, c2x, c2y = crossing_chord(ox, oy, otag, k)
     return st, area, cx, cy, c1x, c1y, c2x, c2y, k
 
 
@@ -335,6 +333,9 @@ def quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag):
 
     For the contact kernel, which needs the status, the overlap polygon and its centroid.
     """
+    # Early out: A wholly outside an edge line of B, so the first clip by that line would
+    # leave nothing (exactly what the clip finds; the converse test is not used: it is only
+    # valid for a convex A, and a distorted element need not be convex)
     if _outside_edge(xb, xa):
         return OV_NONE, 0.0, 0.0, 0.0, 0
     k = clip_convex(xa, 4, xb, 4, ox, oy, otag, wx, wy, wtag)

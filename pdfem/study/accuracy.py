@@ -132,6 +132,11 @@ class AccuracyStudy:
         path = gf.get("path", "")
         self.bed = path if path.lower().endswith((".h5", ".hdf5")) else None
         self.bed_level = bed_level(self.bed) if self.bed else None
+        # Integration points per element of the bed's stresses (None: no stresses stored)
+        self.bed_nip = None
+        if self.bed:
+            with h5py.File(self.bed, "r") as f:
+                self.bed_nip = f["grains/stress"].shape[2] if "grains/stress" in f else None
         self.rows = []
 
     def check_levels(self, levels):
@@ -147,8 +152,7 @@ class AccuracyStudy:
         """The bed file of a setting's level and rule: the scene's own, or a re-meshed copy."""
         from pdfem.prepare.relevel import relevel_bed
 
-        with h5py.File(self.bed, "r") as f:
-            nip = f["grains/stress"].shape[2] if "grains/stress" in f else None
+        nip = self.bed_nip
         same_rule = nip is None or nip == (1 if setting.rule == "1pt" else 4)
         if setting.level == self.bed_level and same_rule:
             return self.bed

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pdfem.bench.cap_yardstick import HMX, cap_state
-from pdfem.bench.cyardstick import load, load_2x2_cap
+from pdfem.bench.cyardstick import load
 from pdfem.bench.numpy_element import bench_mesh
 from pdfem.kernels.cap import CAP_NST
 from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2
@@ -45,7 +45,7 @@ STEEL = {"model": "cap", "density": 7850.0, "bulk": 160.0e9, "shear": 79.0e9, "A
 
 def _cap_c():
     """The C twin of q4_forces_2x2, or skip."""
-    cfn = load_2x2_cap()
+    cfn = load("q4_2x2_cap")
     if cfn is None:
         pytest.skip("no C compiler")
     return cfn

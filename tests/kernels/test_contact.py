@@ -597,8 +597,10 @@ def test_early_out_keeps_the_clips_answer_for_a_non_convex_element():
     assert st[0] == O.OV_NONE and st[1] == 0.0
 
 
-def test_quad_overlap_area_is_quad_overlap_without_the_chord():
-    # Same status, area, centroid and polygon on random pairs, containment and near misses
+def test_quad_overlap_area_is_the_clip_and_classify_of_the_general_path():
+    # The contact kernel's status, area and centroid equal those of clipping A by B and
+    # classifying the polygon with its chord (_classify), on random pairs, containment and
+    # near misses
     rng = np.random.default_rng(11)
     buf, buf2 = O.alloc_clip_buffers(), O.alloc_clip_buffers()
     small = 0.25 * SQ + 0.3
@@ -606,10 +608,13 @@ def test_quad_overlap_area_is_quad_overlap_without_the_chord():
     cases += [(SQ, small), (small, SQ), (SQ, SQ + [2.0, 0.0]), (SQ, SQ + [1.0, 0.5])]
     seen = set()
     for p, q in cases:
-        full = O.quad_overlap(p, q, *buf)
+        k0 = O.clip_convex(p, 4, q, 4, *buf)
+        ref = O._classify(buf[0], buf[1], buf[2], k0, O._bbox_scale2(p))
         st, area, cx, cy, k = O.quad_overlap_area(p, q, *buf2)
-        assert (st, area, cx, cy) == (full[0], full[1], full[2], full[3])
+        assert (st, area, cx, cy) == ref[:4]
         if st != O.OV_NONE:
-            assert k == full[8] and np.array_equal(buf[0][:k], buf2[0][:k])
+            assert k == k0 and np.array_equal(buf[0][:k], buf2[0][:k])
+            # quad_overlap adds the chord of the same polygon
+            assert O.quad_overlap(p, q, *buf2)[4:8] == ref[4:8]
         seen.add(st)
     assert {O.OV_OK, O.OV_NONE, O.OV_INSIDE} <= seen

@@ -62,53 +62,69 @@ def _run(sim, out_path, quiet, log):
     last_log = t0
     stopped = False
     first_step = None
-    try:
-        if sim.restarted:
-            rows, ref = ckpt.restore(frames, samples, gsched, gauges, writer, log)
-        else:
-            # Frame and energy at t = 0
-            writer.write_frame(sim)
-            if len(gauges):
-                gauges.sample(sim)
-            terms = global_terms(sim)
+    guards = sim.guards
+
+    def counters():
+        """The driver's output state, kept with each snapshot of the last good state."""
+        return {"nframe": writer.nframe, "frames_k": frames.k, "samples_k": samples.k,
+                "gauges_k": gsched.k, "checkpoint_k": ckpt.k, "rows": len(rows),
+                "gauge_rows": len(gauges.times)}
+
+    def restore(c):
+        """Output state back to a snapshot's (frames after it are overwritten)."""
+        writer.nframe, frames.k, samples.k, gsched.k, ckpt.k = (
+            c["nframe"], c["frames_k"], c["samples_k"], c["gauges_k"], c["checkpoint_k"])
+        del rows[c["rows"]:]
+        del gauges.times[c["gauge_rows"]:], gauges.rows[c["gauge_rows"]:]
+
+    # What the remedies did at set-up (said even with quiet, like every remedy)
+    if comm.rank == 0:
+        for line in guards.actions:
+            log(line)
+    if sim.restarted:
+        rows, ref = ckpt.restore(frames, samples, gsched, gauges, writer, log)
+    else:
+        # Frame and energy at t = 0
+        writer.write_frame(sim)
+        if len(gauges):
+            gauges.sample(sim)
+        terms = global_terms(sim)
+        if comm.rank == 0:
+            ref = terms
+            rows.append(_row(sim.t, terms, ref, sim.energy_floor))
+    guards.keep(sim, counters())
+    while sim.t < sim.t_end * (1 - 1e-12):
+        if sim.max_steps and sim.nstep >= sim.max_steps:
+            break
+        try:
+            at_end = _step(sim, frames, samples, gsched, gauges, writer, nframes, rows, ref,
+                           guards)
+        except SimulationError as exc:
+            if not guards.can_retry():
+                _fail(sim, guards, restore, ckpt, frames, samples, gsched, gauges, writer,
+                      rows, ref, exc)
+            c, line = guards.retry(sim, str(exc))
+            restore(c)
             if comm.rank == 0:
-                ref = terms
-                rows.append(_row(sim.t, terms, ref))
-        while sim.t < sim.t_end * (1 - 1e-12):
-            if sim.max_steps and sim.nstep >= sim.max_steps:
-                break
-            sim.step()
-            if first_step is None:
-                # Start-up figure: from the pdfem import to the end of the first step
-                first_step = time.perf_counter() - pdfem.STARTED
-                if comm.rank == 0 and not quiet:
-                    log(f"first step at {first_step:.2f} s after start")
-            at_end = sim.t >= sim.t_end * (1 - 1e-12)
-            if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
-                with sim.timers.phase("output"):
-                    writer.write_frame(sim)
-            if len(gauges) and (gsched.due(sim.t) or at_end):
-                with sim.timers.phase("diagnostics"):
-                    gauges.sample(sim)
-            if samples.due(sim.t) or at_end:
-                with sim.timers.phase("diagnostics"):
-                    terms = global_terms(sim)
-                    if comm.rank == 0:
-                        rows.append(_row(sim.t, terms, ref))
-            if ckpt.due(at_end):
-                with sim.timers.phase("output"):
-                    ckpt.write(frames, samples, gsched, gauges, writer, rows, ref)
-            if sim.stop_requested and not at_end:
-                stopped = True
-                break
-            now = time.perf_counter()
-            if comm.rank == 0 and not quiet and now - last_log > 2.0:
-                last_log = now
-                _progress(sim, now - t0, rows, log, start)
-    except SimulationError:
-        # Raised on every rank together: the incomplete run file is removed
-        writer.close(rows, TERMS, ok=False, gauges=gauges)
-        raise
+                log(line)
+            continue
+        if first_step is None:
+            # Start-up figure: from the pdfem import to the end of the first step
+            first_step = time.perf_counter() - pdfem.STARTED
+            if comm.rank == 0 and not quiet:
+                log(f"first step at {first_step:.2f} s after start")
+        if ckpt.due(at_end):
+            with sim.timers.phase("output"):
+                ckpt.write(frames, samples, gsched, gauges, writer, rows, ref)
+        if guards.due(sim):
+            guards.keep(sim, counters())
+        if sim.stop_requested and not at_end:
+            stopped = True
+            break
+        now = time.perf_counter()
+        if comm.rank == 0 and not quiet and now - last_log > 2.0:
+            last_log = now
+            _progress(sim, now - t0, rows, log, start)
     # Any other exception skips the collective close: the command line aborts every rank
     if stopped:
         writer.suspend()
@@ -120,14 +136,54 @@ def _run(sim, out_path, quiet, log):
                "balance_error": rows[-1][-1] if rows else None, "stopped": stopped,
                "checkpoint": ckpt.path if stopped else None,
                "phases": report, "effects": sim.effect_names, "ranks": comm.size,
-               "imbalance": sim.timers.imbalance(comm), "rebalances": sim.rebalances}
+               "imbalance": sim.timers.imbalance(comm), "rebalances": sim.rebalances,
+               "remedies": list(guards.actions)}
     if comm.rank == 0 and not quiet:
         _report(summary, log)
     return summary
 
 
-def _row(t, terms, ref):
-    total, err = balance(terms, ref)
+def _step(sim, frames, samples, gsched, gauges, writer, nframes, rows, ref, guards):
+    """One step and its outputs; the energy-drift guard. Returns True at the end time."""
+    comm = sim.comm
+    sim.step()
+    at_end = sim.t >= sim.t_end * (1 - 1e-12)
+    if (frames.due(sim.t) or at_end) and writer.nframe < nframes:
+        with sim.timers.phase("output"):
+            writer.write_frame(sim)
+    if len(gauges) and (gsched.due(sim.t) or at_end):
+        with sim.timers.phase("diagnostics"):
+            gauges.sample(sim)
+    if samples.due(sim.t) or at_end:
+        with sim.timers.phase("diagnostics"):
+            terms = global_terms(sim)
+            msg = None
+            if comm.rank == 0:
+                rows.append(_row(sim.t, terms, ref, sim.energy_floor))
+                err = rows[-1][-1]
+                if guards.energy_drift > 0 and not err <= guards.energy_drift:
+                    msg = (f"check energy drift: the energy-balance error {err:.3e} exceeds "
+                           f"guards.energy_drift = {guards.energy_drift:g}")
+            msg = comm.bcast(msg, root=0)
+            if msg:
+                raise SimulationError(f"step {sim.nstep}, t={sim.t:.6e} s: {msg}")
+    return at_end
+
+
+def _fail(sim, guards, restore, ckpt, frames, samples, gsched, gauges, writer, rows, ref, exc):
+    """A failed check with no remedy left: the last good state becomes the checkpoint (the
+    run file stays as <path>.part for a restart from it); raise the error, extended."""
+    restore(guards.rollback(sim))
+    with sim.timers.phase("output"):
+        ckpt.write(frames, samples, gsched, gauges, writer, rows, ref)
+    writer.suspend()
+    raise SimulationError(f"{exc}; the last good state (step {sim.nstep}, t={sim.t:.6e} s) "
+                          f"is in {ckpt.path}: change the scene (time.safety, [guards]) and "
+                          f"continue with --restart {ckpt.path}") from None
+
+
+def _row(t, terms, ref, floor):
+    total, err = balance(terms, ref, floor)
     return [t] + [terms[k] for k in TERMS] + [total, err]
 
 

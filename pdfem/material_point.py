@@ -9,6 +9,7 @@ stress of a triaxial test); their strains are then found by Newton at every incr
 """
 
 import math
+import os
 
 import numpy as np
 
@@ -124,6 +125,8 @@ def read_path_csv(fname):
             lines = [ln.strip() for ln in f if ln.strip() and not ln.lstrip().startswith("#")]
     except OSError as exc:
         raise InputError(f"--path: cannot read {fname}: {exc.strerror}") from None
+    except UnicodeDecodeError:
+        raise InputError(f"--path: {fname}: not a text (CSV) file") from None
     if not lines:
         raise InputError(f"--path: {fname} is empty")
     head = [h.strip() for h in lines[0].split(",")]
@@ -234,7 +237,9 @@ def _row(step, eps, sig, st, wp):
 
 
 def write_csv(fname, res):
-    """Write a run_path result with a header line of COLUMNS."""
+    """Write a run_path result with a header line of COLUMNS (``fname.part``, then renamed)."""
     data = np.column_stack([res[c] for c in COLUMNS])
     fmt = ["%d"] + ["%.10g"] * (len(COLUMNS) - 1)
-    np.savetxt(fname, data, fmt=fmt, delimiter=",", header=",".join(COLUMNS), comments="")
+    tmp = f"{fname}.part"
+    np.savetxt(tmp, data, fmt=fmt, delimiter=",", header=",".join(COLUMNS), comments="")
+    os.replace(tmp, fname)

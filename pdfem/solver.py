@@ -18,7 +18,10 @@ from partition import CellGrid, needs_rebalance, partition
 from pdfem import build
 from pdfem.effects import active_effects
 from pdfem.effects.contact import check_contact_scene
+from pdfem.energy import energy_floor, initial_strain_work
 from pdfem.errors import InputError, SimulationError
+from pdfem.guards import Guards, contact_stiffness_cap
+from pdfem.kernels.checks import corner_jacobians, first_nonfinite
 from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
 from pdfem.kernels.material import material_initial_state
@@ -64,7 +67,7 @@ class Simulation:
         self.dt_max, self.dt_min, self.max_steps = tm["dt_max"], tm["dt_min"], tm["max_steps"]
         self.layout = build.Layout(scene.grains["center"].shape[0], el["level"],
                                    r.get("blocks", []))
-        self.keep_contact_force = "contact_force" in r["output"]["fields"]
+        self.has_contact = "contact" in r
         self.rebalances = 0
         self.restarted = restart is not None
         # Stop and checkpoint requests: local flags, shared by the reduction of next_dt
@@ -76,6 +79,9 @@ class Simulation:
             self._build_restart(restart)
         for eff in self.effects:
             eff.setup(self)
+        self.guards = Guards(self)
+        self._cap_contact(restart)
+        self.energy_floor = energy_floor(self)
         # The set-up's temporaries are freed: give their pages back to the OS
         trim()
         self._fail_msg = ""
@@ -83,16 +89,23 @@ class Simulation:
         self.du = np.zeros_like(self.store.v)
         self.f = np.zeros_like(self.store.v)
         self.kin = np.zeros(self.store.nbody)
-        if self.keep_contact_force:
-            self.fc = np.zeros_like(self.store.v)
+        self.fc = self.contact_force_array()
         if restart is not None:
             # Continue exactly where the checkpoint stopped
             st = self.checkpoint.state
             self.t, self.nstep, self.dt, self.dt_prev = st["t"], st["nstep"], st["dt"], \
                 st["dt_prev"]
+            # A time step the remedy halved stays halved unless the scene asks for less
+            self.safety = min(self.safety, st.get("safety", self.safety))
+            self.guards.retries_left = min(self.guards.retries,
+                                           st.get("dt_retries_left", self.guards.retries))
             return
-        # Forces at t = 0 and the first half step
+        # Forces at t = 0 and the first half step; energy accumulators from the t = 0 state
+        initial_strain_work(self)
         self.compute_forces()
+        for eff in self.effects:
+            if hasattr(eff, "start_work"):
+                eff.start_work(self)
         self.dt_prev = 0.0
         self.dt = self.next_dt()
         self.advance_velocities(first=True)
@@ -165,6 +178,17 @@ class Simulation:
             self.store, self.halo = rebuild(self.comm, store, self.grid, self.owner,
                                             self.nglobal)
 
+    def _cap_contact(self, restart):
+        """The cap_contact remedy (pdfem.guards); a restart reuses the checkpoint's cap."""
+        self.contact_cap = None
+        if self.resolved["guards"]["cap_contact"] == "off":
+            return
+        contact = [e for e in self.effects if e.name == "contact"][0]
+        saved = self.checkpoint.state.get("contact_cap") if restart is not None else None
+        self.contact_cap, line = contact_stiffness_cap(self, contact, saved)
+        if line:
+            self.guards.actions.append(line)
+
     def _bed_stress(self, batch, g, mine, e0):
         """Stresses and material state of a prepared bed's grains (elements after e0)."""
         sig, mst = g["elem_sig"], g["elem_mst"]
@@ -215,6 +239,7 @@ class Simulation:
                                                 self.nglobal)
             s = self.store
             self.f = np.zeros_like(s.v)
+            self.fc = self.contact_force_array()
             self.kin = np.zeros(s.nbody)
             for eff in self.effects:
                 eff.after_rebuild(self)
@@ -253,17 +278,41 @@ class Simulation:
                                       s.mst, s.hgq, self.hg_coef, 0, s.ne_own, self.f, s.ewint,
                                       s.ewp, getattr(s, "eth", NO_ETH))
         if bad >= 0:
-            self.fail(f"element {s.elem_loc[bad]} of body {s.elem_gid[bad]} is inverted or "
-                      "its material update failed")
-        f0 = self.f.copy() if self.keep_contact_force else None
-        for eff in self.effects:
-            if hasattr(eff, "contact_forces"):
-                eff.contact_forces(self)
-        if f0 is not None:
-            # The contacts' share of the nodal force, for output
-            self.fc = self.f - f0
+            self.fail(self._element_failure(bad))
+        if self.has_contact:
+            # The contacts' forces go to fc (their work is accounted per body), then to f
+            self.fc[:] = 0.0
+            for eff in self.effects:
+                if hasattr(eff, "contact_forces"):
+                    eff.contact_forces(self)
+            self.f += self.fc
         for eff in self.effects:
             eff.body_force(self)
+        self._check_finite()
+
+    def _element_failure(self, e):
+        """Words for an element the kernel stopped at: which check failed."""
+        s = self.store
+        jac = np.empty(4)
+        jmin = corner_jacobians(s.x, s.conn, e, jac)
+        what = (f"is inverted (corner Jacobians {', '.join(f'{j:.3g}' for j in jac)} m^2)"
+                if jmin <= 0.0 else "is inverted at an integration point or its material "
+                "update failed")
+        return f"check inverted element: element {s.elem_loc[e]} of body {s.elem_gid[e]} {what}"
+
+    def _check_finite(self):
+        """Guard: a NaN or inf in the owned nodal forces (any bad position, velocity, stress
+        or contact ends up there) or temperatures."""
+        s = self.store
+        bad = first_nonfinite(self.f, s.nn_own)
+        what = "force"
+        if bad < 0 and hasattr(s, "T"):
+            bad = first_nonfinite(s.T.reshape(-1, 1), s.nn_own)
+            what = "temperature"
+        if bad >= 0:
+            b = s.node_body[bad]
+            self.fail(f"check non-finite: the {what} of node {bad - s.nstart[b]} of body "
+                      f"{s.gid[b]} is not finite")
 
     def next_dt(self):
         """Global stable step times the safety factor, clipped to the next event; guards."""
@@ -275,11 +324,11 @@ class Simulation:
                 d = eff.stable_dt(self)
                 if d < dt_loc:
                     dt_loc, limiter = d, eff
-        if dt_loc < self.dt_min and not self._fail_msg:
+        if not dt_loc > self.dt_min and not self._fail_msg:
             if not isinstance(limiter, str):
                 limiter = limiter.dt_limiter(self, dt_loc)
-            self.fail(f"stable dt {dt_loc:.3e} s (limited by {limiter}) is below time.dt_min "
-                      f"{self.dt_min:.3e} s")
+            self.fail(f"check time step: the stable dt {dt_loc:.3e} s (limited by {limiter}) is "
+                      f"below time.dt_min {self.dt_min:.3e} s")
         red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0, self.local_stop,
                         self.local_ckpt])
         self.comm.Allreduce(MPI.IN_PLACE, red, op=MPI.MAX)
@@ -293,6 +342,10 @@ class Simulation:
         # No clipping to output times: an abrupt change of dt would spoil the energy identity
         return min(self.safety * dt_stable, self.dt_max)
 
+    def contact_force_array(self):
+        """Zeroed contact forces of the store's nodes; shape (0, 2) without contact."""
+        return np.zeros_like(self.store.v) if self.has_contact else np.zeros((0, 2))
+
     def fail(self, msg):
         """Record a failed check; all ranks stop together at the end of the step."""
         if not self._fail_msg:
@@ -304,20 +357,24 @@ class Simulation:
         dt_avg = 0.5 * (self.dt_prev + self.dt)
         with self.timers.phase("integration"):
             advance_velocities(s.v, self.f, s.m, s.bcf, s.bcv, self.gamma, dt_avg, s.nn_own,
-                               s.node_body, s.acc, self.kin[: s.nb_own], first)
+                               s.node_body, s.acc, self.kin[: s.nb_own], first, self.fc)
 
 
 def _same_scene(path, saved, given):
-    """A restart must run the checkpoint's scene; only [output] and time.end may change."""
+    """A restart must run the checkpoint's scene; only [output], [guards] and the time keys
+    end, safety, dt_min and max_steps may change."""
     import tomllib
 
     a, b = tomllib.loads(saved), tomllib.loads(given)
     for d in (a, b):
         d.pop("output", None)
-        d.get("time", {}).pop("end", None)
+        d.pop("guards", None)
+        for key in ("end", "safety", "dt_min", "max_steps"):
+            d.get("time", {}).pop(key, None)
     if a == b:
         return
     for key in sorted(set(a) | set(b)):
         if a.get(key) != b.get(key):
             raise InputError(f"--restart: {path} was written for a different scene ([{key}] "
-                             "differs; only [output] and time.end may change)")
+                             "differs; only [output], [guards], time.end, time.safety, "
+                             "time.dt_min and time.max_steps may change)")

@@ -90,7 +90,7 @@ velocity = [{v}, 0.0]
 
 
 def collision(v=20.0, end=4e-6, kn0=1.0e16, dmax=2.0e-5, mu=0.0, rule="1pt", level=2,
-              out="run.h5", extra=""):
+              out="run.h5", extra="", damping=0.0):
     """Two equal round grains flying at each other along x (frictionless unless mu > 0)."""
     return f"""
 [domain]
@@ -110,6 +110,7 @@ level = {level}
 kn0 = {kn0}
 delta_max = {dmax}
 friction = {mu}
+damping = {damping}
 
 [output]
 path = "{out}"

@@ -5,6 +5,7 @@ import pytest
 from mpi4py import MPI
 
 from pdfem.energy import global_terms
+from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact import C_ACTIVE, NRES, element_pair_forces, element_wall_forces
 from pdfem.kernels.overlap import element_bboxes, pairs_from_bboxes
 from pdfem.scene import parse_scene
@@ -45,6 +46,52 @@ def test_head_on_collision_exchanges_velocities(tmp_path):
     assert va[0] == pytest.approx(-v0, rel=0.02) and vb[0] == pytest.approx(v0, rel=0.02)
     m = sim.store.m.sum() / 2
     assert 0.5 * m * (va @ va + vb @ vb) == pytest.approx(k0, rel=0.02)
+
+
+def _collide(tmp_path, damping, v0=20.0):
+    """Run the head-on collision until the grains part; (rebound speed / v0, energy balance
+    error, contact_damping / initial kinetic energy, contact_loss / initial kinetic energy)."""
+    from pdfem.energy import balance
+
+    sim = Simulation(parse_scene(collision(v=v0, kn0=1e13, end=2e-5, damping=damping),
+                                 str(tmp_path)), MPI.COMM_SELF)
+    ref = global_terms(sim)
+    touched = False
+    while sim.t < sim.t_end:
+        sim.step()
+        n = int((_contact(sim)._last["active"] == C_ACTIVE).sum())
+        touched |= n > 0
+        if touched and n == 0:
+            break
+    terms = global_terms(sim)
+    return (-_com_velocity(sim, 0)[0] / v0, balance(terms, ref)[1],
+            terms["contact_damping"] / ref["kinetic"], terms["contact_loss"] / ref["kinetic"])
+
+
+def test_contact_damping_takes_energy_out_and_the_balance_closes(tmp_path):
+    e0, err0, damp0, loss0 = _collide(tmp_path, 0.0)
+    e1, err1, damp1, loss1 = _collide(tmp_path, 0.5)
+    e2, err2, damp2, loss2 = _collide(tmp_path, 1.0)
+    # Undamped: elastic rebound, nothing damped, the overlap law absorbs (almost) nothing
+    assert e0 == pytest.approx(1.0, abs=0.02) and damp0 == 0.0 and abs(loss0) < 0.01
+    # Damped: a slower rebound; the damping's dissipation is what the grains lost
+    assert e2 < e1 < 0.97 * e0
+    assert damp1 > 0.05 and damp2 > damp1
+    assert max(abs(loss1), abs(loss2)) < 0.02
+    assert max(err0, err1, err2) < 2e-3
+
+
+def test_damped_normal_and_its_time_step():
+    # Closing at 2 m/s adds c v to the compression, c = 2 zeta sqrt(m k)
+    c = 2 * 0.3 * np.sqrt(2.0 * 5.0)
+    assert L.damped_normal(-1.0, 5.0, -2.0, 2.0, 0.3) == pytest.approx(-1.0 - 2.0 * c)
+    # Separating: less compression, never tension
+    assert L.damped_normal(-1.0, 5.0, 0.1, 2.0, 0.3) == pytest.approx(-1.0 + 0.1 * c)
+    assert L.damped_normal(-1.0, 5.0, 10.0, 2.0, 0.3) == 0.0
+    assert L.damped_normal(-1.0, 5.0, -2.0, 2.0, 0.0) == -1.0
+    # The dashpot shortens the stable step by sqrt(1 + zeta^2) - zeta
+    r = L.contact_dt(2.0, np.inf, 8.0, 0.5) / L.contact_dt(2.0, np.inf, 8.0)
+    assert r == pytest.approx(np.sqrt(1.25) - 0.5, rel=1e-14)
 
 
 REST = """
@@ -168,9 +215,9 @@ def test_no_contact_missed_on_a_dense_bed(tmp_path):
     act = np.empty(m, np.int8)
     res = np.empty((m, NRES))
     element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, pairs,
-                        np.tile([1e13, 2e-5, 5e12, 0.3, 0.95], (m, 1)), np.zeros(m), act,
+                        np.tile([1e13, 2e-5, 5e12, 0.3, 0.95, 0.0], (m, 1)), np.zeros(m), act,
                         np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty((m, 2)),
-                        np.empty(m), res)
+                        np.empty(m), res, s.m, 0.0)
     brute = {(s.elem_gid[a], s.elem_loc[a], s.elem_gid[b], s.elem_loc[b])
              for (a, b), x in zip(pairs, act, strict=True) if x == C_ACTIVE}
     assert found == brute
@@ -179,10 +226,10 @@ def test_no_contact_missed_on_a_dense_bed(tmp_path):
     nw = cand.shape[0]
     wact = np.empty(nw, np.int8)
     element_wall_forces(s.x, sim.du, s.conn, s.ebnd, cand, np.zeros((nw, 2)),
-                        np.tile([0.0, 1.0], (nw, 1)), np.tile([1e13, 2e-5, 5e12, 0.3, 0.95],
-                                                              (nw, 1)), np.zeros(nw), wact,
-                        np.empty((nw, 4), np.int64), np.empty((nw, 4)), np.empty((nw, 2)),
-                        np.empty(nw), np.empty((nw, NRES)))
+                        np.tile([0.0, 1.0], (nw, 1)),
+                        np.tile([1e13, 2e-5, 5e12, 0.3, 0.95, 0.0], (nw, 1)), np.zeros(nw),
+                        wact, np.empty((nw, 4), np.int64), np.empty((nw, 4)),
+                        np.empty((nw, 2)), np.empty(nw), np.empty((nw, NRES)), s.m, 0.0)
     floor = {(s.elem_gid[e], s.elem_loc[e]) for e, x in zip(cand, wact, strict=True)
              if x == C_ACTIVE}
     found_floor = {(k[0], k[1]) for k, a in zip(eff._last["keys"], eff._last["active"],

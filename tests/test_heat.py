@@ -265,8 +265,8 @@ h = 1.0e7
 
 
 @pytest.mark.parametrize("name", [n for n in REGISTRY if n not in
-                                  ("gravity", "damping", "contact", "heat", "cap_plasticity",
-                                   "contact_friction")])
+                                  ("gravity", "damping", "bulk_viscosity", "contact", "heat",
+                                   "cap_plasticity", "contact_friction")])
 def test_heat_effect_without_heat_table_is_an_error(tmp_path, name):
     mat = """[materials.m]
 density = 1900.0

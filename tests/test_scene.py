@@ -129,7 +129,7 @@ def test_full_scene(tmp_path):
     c = r["contact"]
     assert c["ks"] == 5e12
     assert c["pairs"]["glass:hmx"] == {"kn0": 1e13, "delta_max": 1e-5, "ks": 5e12,
-                                       "friction": 0.3}
+                                       "friction": 0.3, "damping": 0.0}
     assert c["pairs"]["hmx:hmx"]["ks"] == 1e13
     assert [b["nx"] for b in s.blocks] == [3, 8]
     assert r["output"]["energy_interval"] == pytest.approx(1e-7)

@@ -138,14 +138,22 @@ def read_run(path):
         raise InputError(f"{path}: cannot read the run file ({e})") from None
     with f:
         try:
-            scene = tomllib.loads(f.attrs["scene"])
-        except (KeyError, tomllib.TOMLDecodeError) as e:
+            text = f.attrs["scene"]
+            if not isinstance(text, str):
+                raise TypeError(f"a {type(text).__name__}, not TOML text")
+            scene = tomllib.loads(text)
+        except (KeyError, TypeError, tomllib.TOMLDecodeError) as e:
             raise InputError(f"{path}: no readable scene attribute ({e})") from None
         shock = _shock_table(path, scene)
         try:
             return _read(f, path, scene, shock)
         except KeyError as e:
             raise InputError(f"{path}: missing dataset or key {e}") from None
+        except (ValueError, IndexError, TypeError) as e:
+            # A dataset of the wrong shape or kind: the file is not a complete run file
+            msg = " ".join(str(e).split())
+            raise InputError(f"{path}: not a complete run file ({type(e).__name__}: {msg})") \
+                from None
 
 
 def _read(f, path, scene, shock):

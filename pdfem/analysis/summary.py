@@ -13,6 +13,14 @@ from pdfem.analysis import front as fr
 from pdfem.analysis.runfile import read_run
 
 NAN = float("nan")
+# The files analyse writes after its prefix: the summary always, the figures with plots = "png"
+SUMMARY_SUFFIXES = ("-summary.json", "-summary.txt")
+FIGURE_SUFFIXES = ("-snapshots.png", "-gauges.png", "-xt.png", "-hugoniot.png")
+
+
+def output_files(prefix, plots="png"):
+    """Paths of the files :func:`analyse` writes for ``prefix`` ([shock].plots = ``plots``)."""
+    return [prefix + s for s in SUMMARY_SUFFIXES + (FIGURE_SUFFIXES if plots == "png" else ())]
 
 
 def _plain(v):

@@ -8,6 +8,7 @@ the program with its message on one line and exit status 2; a
 
 import argparse
 import importlib
+import os
 import sys
 
 from pdfem.errors import InputError, SimulationError
@@ -32,12 +33,15 @@ def _parser():
 
 
 def _rank():
-    try:
-        from mpi4py import MPI
-
-        return MPI.COMM_WORLD.rank
-    except Exception:
-        return 0
+    """This process's rank; an error found before MPI started does not start it (under
+    mpirun the launcher's environment tells the rank)."""
+    mpi = sys.modules.get("mpi4py.MPI")
+    if mpi is not None:
+        return mpi.COMM_WORLD.rank
+    for var in ("OMPI_COMM_WORLD_RANK", "PMIX_RANK", "PMI_RANK"):
+        if os.environ.get(var, "").isdigit():
+            return int(os.environ[var])
+    return 0
 
 
 def main(argv=None):

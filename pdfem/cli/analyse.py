@@ -10,6 +10,8 @@ def add_parser(sub):
     p.add_argument("runfile", help="run file (HDF5) of a scene with a [shock] table")
     p.add_argument("-p", "--prefix", default=None, help="prefix of the summary and figure "
                    "files (default: the run file without .h5)")
+    p.add_argument("--force", action="store_true", help="overwrite existing summary and "
+                   "figure files")
 
 
 def prefix_of(path):
@@ -18,13 +20,33 @@ def prefix_of(path):
     return root if ext in (".h5", ".hdf5") else path
 
 
+def _plots(path):
+    """[shock].plots of a run file's scene, or None when the file does not tell (then
+    :func:`pdfem.analysis.analyse` reports what is wrong with it)."""
+    import tomllib
+
+    import h5py
+
+    try:
+        with h5py.File(path, "r") as f:
+            return tomllib.loads(str(f.attrs["scene"]))["shock"].get("plots", "png")
+    except (OSError, KeyError, TypeError, AttributeError, tomllib.TOMLDecodeError):
+        return None
+
+
 def run(args):
     from pdfem.analysis import analyse
-    from pdfem.analysis.summary import report_text
+    from pdfem.analysis.summary import output_files, report_text
+    from pdfem.cli.run import check_output_path
     from pdfem.errors import InputError
 
     if not os.path.isfile(args.runfile):
         raise InputError(f"{args.runfile}: no such run file")
-    summary = analyse(args.runfile, args.prefix or prefix_of(args.runfile))
+    prefix = prefix_of(args.runfile) if args.prefix is None else args.prefix
+    plots = _plots(args.runfile)
+    if plots is not None:
+        for path in output_files(prefix, plots):
+            check_output_path(path, args.force, "--prefix")
+    summary = analyse(args.runfile, prefix)
     print(report_text(summary))
     return 0

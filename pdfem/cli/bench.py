@@ -11,18 +11,22 @@ printed, never asserted; all but parallel run on one rank.
 """
 
 import json
+import os
 
 from pdfem.errors import InputError
 
+# The largest sizes and repeat count taken (more is a typo: memory or time would run out)
+MOST = {"--n": 10**7, "--sizes": 10**7, "--per-rank": 10**7, "--repeat": 1000}
+
 
 def _positive_int(name, text, least=1):
-    """An integer >= least, or InputError naming the option."""
+    """An integer in [least, MOST[name]], or InputError naming the option."""
     try:
         value = int(text)
     except ValueError:
         raise InputError(f"bench: {name}: not an integer (got {text!r})") from None
-    if value < least:
-        raise InputError(f"bench: {name}: must be >= {least} (got {value})")
+    if not least <= value <= MOST[name]:
+        raise InputError(f"bench: {name}: must be in [{least}, {MOST[name]}] (got {value})")
     return value
 
 
@@ -60,6 +64,7 @@ def add_parser(sub):
     for q in (pa, al):
         q.add_argument("--per-rank", default="10000", help="grains per rank (default 10000)")
     pa.add_argument("--json", default=None, help="also write the figures to this JSON file")
+    pa.add_argument("--force", action="store_true", help="overwrite an existing JSON file")
     for q in (su, al):
         q.add_argument("--warm-only", action="store_true", help="skip the cold start (a "
                        "private empty numba cache: every kernel compiled, about 30 s)")
@@ -71,14 +76,18 @@ def add_parser(sub):
 
 def run(args):
     """Check the arguments, then run the chosen benchmarks."""
-    from pdfem.parallel.mpi import world
-
-    # Arguments first: a bad one costs no benchmark time
+    # Arguments first: a bad one costs no benchmark time (nor MPI's start)
     repeat = _positive_int("--repeat", args.repeat)
     n = _positive_int("--n", args.n) if hasattr(args, "n") else None
     sizes = _sizes(args.sizes) if hasattr(args, "sizes") else None
     per_rank = _positive_int("--per-rank", args.per_rank, least=2) \
         if hasattr(args, "per_rank") else None
+    if args.what == "parallel" and args.json is not None:
+        from pdfem.cli.run import check_output_path
+
+        check_output_path(args.json, args.force, "--json")
+    from pdfem.parallel.mpi import world
+
     if args.what == "parallel":
         from pdfem.bench.parallel import print_parallel
 
@@ -86,8 +95,9 @@ def run(args):
             raise InputError("bench parallel: start it under mpirun with 2 or more ranks")
         r = print_parallel(per_rank, repeat, log=_log)
         if args.json and world().rank == 0:
-            with open(args.json, "w") as f:
+            with open(args.json + ".part", "w") as f:
                 json.dump(r, f)
+            os.replace(args.json + ".part", args.json)
         return 0
     if world().size > 1:
         raise InputError(f"bench {args.what}: runs on one rank (single-core figures); start it "

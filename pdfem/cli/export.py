@@ -21,6 +21,7 @@ def add_parser(sub):
     p.add_argument("-p", "--prefix", default=None, help="output prefix (default: the run "
                    "file without .h5)")
     p.add_argument("--frames", default="all", help="all (default), last, or indices 0,5,9")
+    p.add_argument("--force", action="store_true", help="overwrite existing output files")
 
 
 def _frames(text, n):
@@ -77,40 +78,106 @@ def _components(data):
     return out
 
 
-def run(args):
-    import h5py
+def _format(fmt):
+    """A meshio writer's name, or InputError listing them."""
     import meshio
 
-    if not os.path.isfile(args.runfile):
-        raise InputError(f"{args.runfile}: no such run file")
-    prefix = args.prefix or os.path.splitext(args.runfile)[0]
-    fmt = args.format.lower()
-    try:
-        f = h5py.File(args.runfile, "r")
-    except OSError as exc:
-        raise InputError(f"{args.runfile}: cannot read: {exc}") from None
-    with f:
-        if "frames" not in f or "mesh" not in f:
-            raise InputError(f"{args.runfile}: not a pdfem run file (no /frames or /mesh)")
-        times = f["frames/time"][...]
-        ks = _frames(args.frames, times.shape[0])
-        if fmt == "xdmf":
-            # A meshio time series: one mesh, the frames as time steps
+    known = sorted({f for fs in meshio.extension_to_filetypes.values() for f in fs})
+    if fmt not in known:
+        raise InputError(f"--format: meshio has no writer {fmt!r} (known: {', '.join(known)})")
+    return fmt
+
+
+def _outputs(runfile, prefix, fmt, ks, force):
+    """The files of the export (checked: new or --force, never the run file itself)."""
+    from pdfem.cli.run import check_output_path
+
+    if fmt == "xdmf":
+        # meshio's XDMF time series: <prefix>.xdmf and its data in <prefix>.h5
+        paths = [prefix + ".xdmf", prefix + ".h5"]
+    else:
+        ext = {"vtu": "vtu", "vtk": "vtk"}.get(fmt, fmt)
+        paths = [f"{prefix}-{k:04d}.{ext}" for k in ks]
+    for path in paths:
+        check_output_path(path, force, "--prefix")
+        if os.path.exists(path) and os.path.samefile(path, runfile):
+            raise InputError(f"--prefix: {path} is the run file being exported; give another "
+                             "--prefix")
+    return paths
+
+
+def _write_xdmf(f, times, ks, paths):
+    """The XDMF time series, written in a scratch folder beside its final place (meshio puts
+    the .h5 in the working directory) and moved there when complete."""
+    import contextlib
+    import tempfile
+
+    import meshio
+
+    folder = os.path.dirname(os.path.abspath(paths[0]))
+    stem = os.path.splitext(os.path.basename(paths[0]))[0]
+    with tempfile.TemporaryDirectory(dir=folder, prefix=".pdfem-export-") as tmp:
+        with contextlib.chdir(tmp):
             m0 = frame_mesh(f, ks[0])
-            with meshio.xdmf.TimeSeriesWriter(prefix + ".xdmf") as w:
+            with meshio.xdmf.TimeSeriesWriter(stem + ".xdmf") as w:
                 w.write_points_cells(m0.points, m0.cells)
                 for k in ks:
                     m = frame_mesh(f, k)
                     w.write_data(float(times[k]), point_data=m.point_data,
                                  cell_data=_components(m.cell_data))
-            print(f"pdfem export: {len(ks)} frame(s) -> {prefix}.xdmf")
-            return 0
-        ext = {"vtu": "vtu", "vtk": "vtk"}.get(fmt, fmt)
-        for k in ks:
-            path = f"{prefix}-{k:04d}.{ext}"
+        for ext, path in zip((".xdmf", ".h5"), paths, strict=True):
+            os.replace(os.path.join(tmp, stem + ext), path)
+
+
+def _write_frames(f, fmt, ks, paths):
+    """One file per frame, each written as ``<path>.part``; renamed when all are complete."""
+    import meshio
+
+    tmps, done = [p + ".part" for p in paths], False
+    try:
+        for k, tmp in zip(ks, tmps, strict=True):
+            mesh = frame_mesh(f, k)
             try:
-                meshio.write(path, frame_mesh(f, k), file_format=fmt)
-            except (ValueError, KeyError) as exc:
+                meshio.write(tmp, mesh, file_format=fmt)
+            except (ValueError, KeyError, TypeError, meshio.WriteError) as exc:
                 raise InputError(f"--format: meshio cannot write {fmt!r}: {exc}") from None
-        print(f"pdfem export: {len(ks)} frame(s) -> {prefix}-NNNN.{ext}")
+        done = True
+    finally:
+        for tmp in tmps:
+            if not done and os.path.exists(tmp):
+                os.remove(tmp)
+    for tmp, path in zip(tmps, paths, strict=True):
+        os.replace(tmp, path)
+
+
+def run(args):
+    import h5py
+
+    if not os.path.isfile(args.runfile):
+        raise InputError(f"{args.runfile}: no such run file")
+    prefix = os.path.splitext(args.runfile)[0] if args.prefix is None else args.prefix
+    fmt = _format(args.format.lower())
+    try:
+        f = h5py.File(args.runfile, "r")
+    except OSError as exc:
+        raise InputError(f"{args.runfile}: cannot read: {exc}") from None
+    with f:
+        if "frames" not in f or "mesh" not in f or "time" not in f["frames"]:
+            raise InputError(f"{args.runfile}: not a pdfem run file (no /frames or /mesh)")
+        times = f["frames/time"][...]
+        ks = _frames(args.frames, times.shape[0])
+        if not ks:
+            raise InputError(f"{args.runfile}: the run file holds no frames")
+        paths = _outputs(args.runfile, prefix, fmt, ks, args.force)
+        try:
+            if fmt == "xdmf":
+                _write_xdmf(f, times, ks, paths)
+            else:
+                _write_frames(f, fmt, ks, paths)
+        except (KeyError, IndexError, ValueError, TypeError) as exc:
+            # A missing dataset, or one of the wrong shape or kind
+            msg = " ".join(str(exc).split())
+            raise InputError(f"{args.runfile}: not a complete pdfem run file ({msg})") from None
+    where = paths[0] if fmt == "xdmf" else f"{prefix}-NNNN.{paths[0].rsplit('.', 1)[1]}"
+    print(f"pdfem export: {len(ks)} frame(s) -> {where}")
     return 0

@@ -10,14 +10,10 @@ import os
 import tomllib
 
 from pdfem.errors import InputError
-from pdfem.material_point import (
-    NAMED_PATHS,
-    cap_params_from_table,
-    named_path,
-    read_path_csv,
-    run_path,
-    write_csv,
-)
+
+# The built-in strain paths (pdfem.material_point.NAMED_PATHS; that module loads numba, which
+# the command line imports only when the command runs)
+NAMED_PATHS = ("uniaxial", "hydrostatic", "triaxial", "load-unload")
 
 
 def add_parser(subparsers):
@@ -37,6 +33,7 @@ def add_parser(subparsers):
     sp.add_argument("--nsub", type=int, default=50,
                     help="increments per path segment (default 50)")
     sp.add_argument("--out", default="material.csv", help="output CSV (default material.csv)")
+    sp.add_argument("--force", action="store_true", help="overwrite an existing output CSV")
     return sp
 
 
@@ -46,9 +43,11 @@ def _material_table(fname, name):
         with open(fname, "rb") as f:
             doc = tomllib.load(f)
     except OSError as exc:
-        raise InputError(f"{fname}: {exc.strerror}") from None
+        raise InputError(f"{fname}: cannot read the scene file: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise InputError(f"{fname}: cannot read the scene file: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{fname}: {exc}") from None
+        raise InputError(f"{fname}: TOML syntax: {exc}") from None
     mats = doc.get("materials", {})
     if name not in mats:
         have = ", ".join(sorted(mats)) or "none"
@@ -56,15 +55,33 @@ def _material_table(fname, name):
     return mats[name]
 
 
+def _strain(value, option):
+    """A strain from the command line: finite, at most 1 in magnitude."""
+    if value is not None and not abs(value) <= 1.0:
+        raise InputError(f"{option}: must be a strain in [-1, 1] (got {value!r})")
+    return value
+
+
 def run(args):
     """Run the material point and write the CSV; returns 0."""
+    from pdfem.cli.run import check_output_path
+    from pdfem.material_point import (
+        cap_params_from_table,
+        named_path,
+        read_path_csv,
+        run_path,
+        write_csv,
+    )
+
     tbl = _material_table(args.scene, args.material)
-    p = cap_params_from_table(tbl, where=f"materials.{args.material}")
+    p = cap_params_from_table(tbl, where=f"{args.scene}: materials.{args.material}")
     # Named path (an unknown name raises, listing the choices), or a file of target strains
+    strain, axial = _strain(args.strain, "--strain"), _strain(args.axial, "--axial")
     if args.path in NAMED_PATHS or not os.path.exists(args.path):
-        path, held = named_path(args.path, args.strain, args.axial)
+        path, held = named_path(args.path, strain, axial)
     else:
         path, held = read_path_csv(args.path), None
+    check_output_path(args.out, args.force, "--out")
     res = run_path(p, path, args.nsub, held)
     write_csv(args.out, res)
     return 0

@@ -14,18 +14,20 @@ def add_parser(sub):
 
 
 def run(args):
-    from pdfem.parallel.mpi import world
-    from pdfem.prepare.phases import prepare
     from pdfem.scene import load_scene
 
-    comm = world()
     scene = load_scene(args.scene)
     if "prepare" not in scene.resolved:
         from pdfem.errors import InputError
 
         raise InputError(f"{args.scene}: prepare: the scene has no [prepare] table")
-    out = os.path.abspath(args.output or scene.resolved["prepare"]["output"])
+    out = scene.resolved["prepare"]["output"] if args.output is None else args.output
     check_output_path(out, args.force, "prepare.output")
+    out = os.path.abspath(out)
+    from pdfem.parallel.mpi import world
+    from pdfem.prepare.phases import prepare
+
+    comm = world()
     if comm.rank == 0:
         print(f"pdfem: preparing {args.scene} on {comm.size} rank(s) -> {out}", flush=True)
     prepare(args.scene, out, comm)

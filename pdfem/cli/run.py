@@ -25,30 +25,57 @@ def add_parser(sub):
 
 
 def check_output_path(path, force, key="output.path"):
-    """The output file must be new (or --force) and its folder writable."""
+    """The output file must be new (or --force), not a folder, and its folder writable."""
+    if not path:
+        raise InputError(f"{key}: empty file name")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
-        raise InputError(f"{key}: folder {folder} does not exist")
+        what = "is not a folder" if os.path.exists(folder) else "does not exist"
+        raise InputError(f"{key}: {folder} {what}")
     if not os.access(folder, os.W_OK):
         raise InputError(f"{key}: folder {folder} is not writable")
-    if os.path.exists(path) and not force:
+    if os.path.isdir(path):
+        raise InputError(f"{key}: {path} is a folder, not a file name")
+    if os.path.lexists(path) and not force:
         raise InputError(f"{key}: {path} exists (use --force to overwrite)")
 
 
+def run_outputs(out, scene, plots=None, restart=None):
+    """Every file a run of ``scene`` into ``out`` may leave: the run file, its XDMF sidecar,
+    its checkpoint (unless it is the ``restart`` being continued) and, for a shock scene, the
+    analysis (summary, and figures unless ``plots`` or the scene's shock.plots is "none")."""
+    from pdfem.analysis.summary import output_files
+    from pdfem.cli.analyse import prefix_of
+
+    files = [out, os.path.splitext(out)[0] + ".xdmf"]
+    if os.path.abspath(files[0]) == os.path.abspath(files[1]):
+        raise InputError(f"output.path: {out}: the XDMF sidecar takes that name; use .h5")
+    ckpt = out + ".ckpt.h5"
+    if restart is None or os.path.abspath(restart) != os.path.abspath(ckpt):
+        files.append(ckpt)
+    if "shock" in scene.resolved:
+        files += output_files(prefix_of(out), plots or scene.resolved["shock"]["plots"])
+    return files
+
+
 def run(args):
+    from pdfem.scene import check_ranks, load_scene
+
+    # The input first (a bad one is reported before MPI and the solver load)
+    scene = load_scene(args.scene or default_scene_path())
+    out = scene.resolved["output"]["path"] if args.output is None else args.output
+    for path in run_outputs(out, scene, restart=args.restart):
+        check_output_path(path, args.force)
+    if args.restart and not os.path.isfile(args.restart):
+        raise InputError(f"--restart: {args.restart}: no such checkpoint file")
     from pdfem.driver import run as drive
     from pdfem.parallel.mpi import world
-    from pdfem.scene import load_scene
     from pdfem.solver import Simulation
 
     comm = world()
-    scene = load_scene(args.scene or default_scene_path())
-    out = args.output or scene.resolved["output"]["path"]
-    check_output_path(out, args.force)
+    check_ranks(scene, comm.size)
     if comm.rank == 0 and not args.quiet:
         print(f"pdfem: {scene.path} on {comm.size} rank(s) -> {out}", flush=True)
-    if args.restart and not os.path.isfile(args.restart):
-        raise InputError(f"--restart: {args.restart}: no such checkpoint file")
     sim = Simulation(scene, comm, restart=args.restart)
     summary = drive(sim, out, quiet=args.quiet)
     if "shock" in scene.resolved and not summary["stopped"]:

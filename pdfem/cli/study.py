@@ -9,6 +9,7 @@ Each study is one entry of :data:`STUDIES`: a function adding its arguments and 
 it, so another study is one more entry.
 """
 
+import math
 import os
 import shutil
 import tomllib
@@ -29,6 +30,8 @@ def _numbers(text, option, kind=float):
         raise InputError(f"{option}: not a list of {word}: {text!r}") from None
     if not vals:
         raise InputError(f"{option}: empty list")
+    if not all(math.isfinite(v) for v in vals):
+        raise InputError(f"{option}: not a list of finite numbers: {text!r}")
     return vals
 
 
@@ -115,7 +118,7 @@ def _outputs(prefix, force):
 
 def _accuracy(args):
     from pdfem.parallel.mpi import world
-    from pdfem.scene import load_scene
+    from pdfem.scene import check_ranks, load_scene
     from pdfem.study import accuracy as acc
     from pdfem.study import pareto
 
@@ -136,6 +139,7 @@ def _accuracy(args):
     scene = load_scene(path)
     if "shock" not in scene.resolved:
         raise InputError(f"{path}: shock: the accuracy study needs a scene with a [shock] table")
+    check_ranks(scene, comm.size)
     if "contact" not in scene.resolved and scales != [1.0]:
         raise InputError(f"{path}: contact: --kn0-scale needs a scene with a [contact] table")
     with open(path, "rb") as fh:
@@ -192,6 +196,64 @@ def _convergence(args):
     return 0
 
 
+def _hard_args(p):
+    from pdfem.study.hard_cases import CASES, LARGE_ONLY
+
+    p.add_argument("--size", choices=("ci", "large"), default="large", help="ci: the "
+                   "seconds-long versions the test suite runs; large: the study's (default)")
+    p.add_argument("--case", default="all", help="comma-separated case names or all "
+                   f"(the cases: {', '.join(CASES)}; {', '.join(LARGE_ONLY)} only with "
+                   "--size large)")
+    p.add_argument("-p", "--prefix", default="study-hard", help="runs go to <prefix>-runs/, "
+                   "the table to <prefix>.json (default study-hard)")
+    p.add_argument("--force", action="store_true", help="overwrite existing output")
+
+
+def _hard(args):
+    import json
+
+    from pdfem.parallel.mpi import world
+    from pdfem.study.hard import print_rows, run_case
+    from pdfem.study.hard_cases import CASES, LARGE_ONLY
+
+    comm = world()
+    if comm.size < 2:
+        raise InputError("study hard: start it under mpirun with 2 or more ranks (each case "
+                         "runs on 1 rank and on all of them)")
+    names = [c for c in CASES if args.size == "large" or c not in LARGE_ONLY]
+    if args.case != "all":
+        asked = [c.strip() for c in args.case.split(",") if c.strip()]
+        bad = [c for c in asked if c not in names]
+        if bad or not asked:
+            raise InputError(f"--case: {bad[0] if bad else args.case!r} is not a case of "
+                             f"--size {args.size} ({', '.join(names)})")
+        names = asked
+    from pdfem.cli.run import check_output_path
+
+    check_output_path(args.prefix + ".json", args.force, "--prefix")
+    folder = args.prefix + "-runs"
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise InputError(f"--prefix: {folder} exists and is not a folder")
+    rows = []
+    for name in names:
+        row = run_case(name, os.path.join(folder, name), args.size, comm)
+        if comm.rank == 0:
+            rows.append(row)
+            print_rows([row])
+    if comm.rank == 0:
+        print("\nall cases:")
+        print_rows(rows)
+        tmp = args.prefix + ".json.part"
+        with open(tmp, "w") as f:
+            json.dump(rows, f, indent=1)
+        os.replace(tmp, args.prefix + ".json")
+        passed = sum(r["passed"] for r in rows)
+        print(f"pdfem study hard: {passed} of {len(rows)} cases pass on 1 and {comm.size} "
+              f"ranks; {args.prefix}.json, runs in {folder}/", flush=True)
+    comm.Barrier()
+    return 0
+
+
 # Study name -> (help, add its arguments, run it)
 STUDIES = {
     "accuracy": ("what accuracy costs in time on a shock scene: mesh level, element rule, "
@@ -199,12 +261,16 @@ STUDIES = {
                  _accuracy_args, _accuracy),
     "convergence": ("observed convergence order of the element on a standing elastic wave",
                     _convergence_args, _convergence),
+    "hard": ("hard cases (fast hammers, stiff contact, needle grains, sheared meshes, fast "
+             "migration, squeezing, tight conduction, long settling) on 1 and N ranks: "
+             "energy balance, finiteness, Jacobians, bit-identity (under mpirun)",
+             _hard_args, _hard),
 }
 
 
 def add_parser(sub):
     p = sub.add_parser("study", help="studies of the solver: accuracy (accuracy against "
-                       "cost on a shock scene), convergence (element order)")
+                       "cost on a shock scene), convergence (element order), hard (hard cases)")
     studies = p.add_subparsers(dest="study", metavar="STUDY", required=True)
     for name, (text, add_args, _) in STUDIES.items():
         add_args(studies.add_parser(name, help=text, description=text))

@@ -2,6 +2,7 @@
 speeds; Us-up and stress-density points beside the snowplow bound (report fig. 13 style)."""
 
 import json
+import math
 import os
 import tomllib
 
@@ -26,21 +27,16 @@ def _speeds(text):
         vals = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise InputError(f"--velocities: not a list of numbers: {text!r}") from None
-    if not vals or any(not v > 0.0 for v in vals):
-        raise InputError(f"--velocities: need speeds > 0 m/s (got {text!r})")
+    if not vals or any(not 0.0 < v < math.inf for v in vals):
+        raise InputError(f"--velocities: need speeds > 0 m/s, finite (got {text!r})")
     return vals
 
 
 def run(args):
-    from pdfem.analysis import analyse
-    from pdfem.analysis.plots import sweep_plot
-    from pdfem.cli.run import check_output_path, default_scene_path
-    from pdfem.driver import run as drive
-    from pdfem.parallel.mpi import world
-    from pdfem.scene import load_scene, parse_scene
-    from pdfem.solver import Simulation
+    from pdfem.cli.run import check_output_path, default_scene_path, run_outputs
+    from pdfem.scene import check_ranks, load_scene, parse_scene
 
-    comm = world()
+    # The input first (a bad one is reported before MPI and the solver load)
     speeds = _speeds(args.velocities)
     path = args.scene or default_scene_path()
     scene = load_scene(path)
@@ -48,8 +44,18 @@ def run(args):
         raise InputError(f"{path}: shock: sweep needs a scene with a [shock] table")
     hammer = scene.resolved["shock"]["hammer"]
     outs = [f"{args.prefix}-v{v:g}.h5" for v in speeds]
-    for out in outs + [args.prefix + ".json"]:
+    # The runs (plots off: summaries only) and the sweep's own JSON and figure
+    files = [f for o in outs for f in run_outputs(o, scene, plots="none")]
+    for out in files + [args.prefix + ".json", args.prefix + ".png"]:
         check_output_path(out, args.force, "--prefix")
+    from pdfem.analysis import analyse
+    from pdfem.analysis.plots import sweep_plot
+    from pdfem.driver import run as drive
+    from pdfem.parallel.mpi import world
+    from pdfem.solver import Simulation
+
+    comm = world()
+    check_ranks(scene, comm.size)
     with open(path, "rb") as fh:
         doc = tomllib.load(fh)
     points = []

@@ -19,6 +19,7 @@ from pdfem.effects.thermal import (
     ThermalExpansion,
     Thermoelastic,
 )
+from pdfem.effects.viscosity import BulkViscosity
 
 
 class CapPlasticity(Effect):
@@ -58,6 +59,7 @@ class ContactFriction(Effect):
 REGISTRY = {
     "gravity": Gravity,
     "damping": Damping,
+    "bulk_viscosity": BulkViscosity,
     "contact": Contact,
     "contact_friction": ContactFriction,
     "cap_plasticity": CapPlasticity,

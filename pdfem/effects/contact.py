@@ -26,6 +26,7 @@ from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact import (
     C_ACTIVE,
     NRES,
+    R_DAMP,
     R_DELTA,
     R_DISS,
     R_ENERGY,
@@ -38,7 +39,7 @@ from pdfem.kernels.contact import (
     max_speed,
 )
 from pdfem.kernels.heat import accumulate_heat_sorted, contact_heat
-from pdfem.kernels.integrate import ACC_FRIC
+from pdfem.kernels.integrate import ACC_CDAMP, ACC_CWORK, ACC_FRIC
 from pdfem.kernels.neighbours import (
     body_boxes,
     grain_pairs,
@@ -99,6 +100,8 @@ class Contact(Effect):
                 row[L.P_KS] = over.get("ks", table["ks"])
                 row[L.P_MU] = over.get("friction", table["friction"])
                 row[L.P_RCAP] = RCAP
+                row[L.P_ZETA] = over.get("damping", table["damping"])
+        self.zeta_max = float(self.law[:, :, L.P_ZETA].max())
         self.delta_max = float(self.law[:, :, L.P_DMAX].max())
         self.delta_min = float(self.law[:, :, L.P_DMAX].min())
         self.kn0_max = float(self.law[:, :, L.P_KN0].max())
@@ -221,15 +224,16 @@ class Contact(Effect):
         us_out = np.empty(n)
         res = np.empty((n, NRES))
         sl = slice(0, npair)
+        dt = getattr(sim, "dt", 0.0)
         bad = element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, pairs,
                                   params[sl], us_in[sl], active[sl], nodes[sl], weights[sl],
-                                  fa[sl], us_out[sl], res[sl])
+                                  fa[sl], us_out[sl], res[sl], s.m, dt)
         sl = slice(npair, n)
         if nwall:
             p0, nrm = self._wall_p0[wids], self._wall_n[wids]
             bad += element_wall_forces(s.x, sim.du, s.conn, s.ebnd, welems, p0, nrm, params[sl],
                                        us_in[sl], active[sl], nodes[sl], weights[sl], fa[sl],
-                                       us_out[sl], res[sl])
+                                       us_out[sl], res[sl], s.m, dt)
         self._check(sim, keys, active, res, bad)
         self._apply(sim, keys, order, active, nodes, weights, fa, res, pairs)
         self._bookkeeping(sim, keys, order, active, us_out, res, pairs, welems)
@@ -241,10 +245,11 @@ class Contact(Effect):
         if bad or deep.any():
             p = int(np.nonzero((active < 0) | deep)[0][0])
             k = keys[p]
-            what = "deeper than contact.delta_max" if deep[p] else "degenerate (one element " \
-                "inside the other)"
+            what = (f"deeper than contact.delta_max (delta = {res[p, R_DELTA]:.3e} m)"
+                    if deep[p] else "degenerate (one element inside the other)")
             other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
-            sim.fail(f"contact between body {k[0]} element {k[1]} and {other} is {what}")
+            sim.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
+                     f"and {other} is {what}")
 
     def _apply(self, sim, keys, order, active, nodes, weights, fa, res, pairs):
         """Add forces (and contact heat) to owned nodes in key order (order sorts keys);
@@ -288,7 +293,7 @@ class Contact(Effect):
     def _add(self, sim, order, active, nodes, weights, fa, q):
         """Forces (and heat, q not None) of the contacts in the given order to owned nodes."""
         s = sim.store
-        accumulate_sorted(order, active, nodes, weights, fa, s.nn_own, sim.f)
+        accumulate_sorted(order, active, nodes, weights, fa, s.nn_own, sim.fc)
         if q is not None:
             accumulate_heat_sorted(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own,
                                    sim.heat.src)
@@ -307,6 +312,8 @@ class Contact(Effect):
         self.energy = np.bincount(bodies, res[rows, R_ENERGY], minlength=s.nbody)
         if self.friction:
             s.acc[:, ACC_FRIC] += np.bincount(bodies, res[rows, R_DISS], minlength=s.nbody)
+        if self.zeta_max > 0.0:
+            s.acc[:, ACC_CDAMP] += np.bincount(bodies, res[rows, R_DAMP], minlength=s.nbody)
 
     # ------------------------------------------------------------------ step size, energy
     def stable_dt(self, sim):
@@ -316,11 +323,13 @@ class Contact(Effect):
         s = sim.store
         vmax = max_speed(s.v, 0, s.nn_own)
         dt = APPROACH * self.delta_min / (2.0 * vmax) if vmax > 0.0 else np.inf
-        dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.m, 0, s.ne_own, self.kn0_max))
+        dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.m, 0, s.ne_own, self.kn0_max,
+                                  self.zeta_max))
         if self._last is None:
             return dt
         last = self._last
-        return min(dt, contact_dt_min(last["active"], last["nodes"], last["res"], s.m, s.x))
+        return min(dt, contact_dt_min(last["active"], last["nodes"], last["res"], s.m, s.x,
+                                      self.zeta_max))
 
     def dt_limiter(self, sim, dt):
         """Words naming what limits the step to dt (for the time.dt_min error): the contact
@@ -331,16 +340,22 @@ class Contact(Effect):
             for p in np.nonzero(last["active"] == C_ACTIVE)[0]:
                 sl = slice(p, p + 1)
                 if contact_dt_min(last["active"][sl], last["nodes"][sl], last["res"][sl], s.m,
-                                  s.x) <= dt:
+                                  s.x, self.zeta_max) <= dt:
                     k = last["keys"][p]
                     other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
                     return (f"the stiffness of the contact between body {k[0]} element {k[1]} "
                             f"and {other}")
         for e in range(s.ne_own):
-            if entry_dt_min(s.x, s.conn, s.ebnd, s.m, e, e + 1, self.kn0_max) <= dt:
+            if entry_dt_min(s.x, s.conn, s.ebnd, s.m, e, e + 1, self.kn0_max,
+                            self.zeta_max) <= dt:
                 return (f"contact.kn0 on the edges of body {s.elem_gid[e]} element "
                         f"{s.elem_loc[e]}")
         return "the approach speed of the contacts (delta_max / speed)"
+
+    def start_work(self, sim):
+        """At t = 0: the contact work accumulators start at minus the stored energy, so that
+        the absorbed energy (energy.py, contact_loss) counts from the initial state."""
+        sim.store.acc[:, ACC_CWORK] -= self.energy
 
     def energy_terms(self, sim, out):
         e = getattr(self, "energy", None)

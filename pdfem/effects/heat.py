@@ -147,8 +147,8 @@ class Heat(Effect):
                     bad = conduction_flows(s.x, s.T, s.conn, s.emat, sim.mat_params, 0,
                                            s.ne_own, self.q)
                     if bad >= 0:
-                        sim.fail(f"element {s.elem_loc[bad]} of body {s.elem_gid[bad]} is "
-                                 "inverted (heat conduction)")
+                        sim.fail(f"check inverted element: element {s.elem_loc[bad]} of "
+                                 f"body {s.elem_gid[bad]} is inverted (heat conduction)")
                 advance_temperature(s.T, self.q, self.src, s.tcap, h, s.nn_own)
                 hold_temperature(s.T, s.tcap, s.tfix, s.tfixv, s.node_body, s.nn_own, s.hacc,
                                  HACC_BC)
@@ -160,8 +160,8 @@ class Heat(Effect):
         lim = sim.comm.allreduce(loc, op=MPI.MIN) * sim.safety
         nsub = 1 if lim >= dt else math.ceil(dt / lim)
         if nsub > NSUB_MAX:
-            sim.fail(f"heat conduction needs {nsub} sub-steps of {lim:.3e} s per step of "
-                     f"{dt:.3e} s (more than {NSUB_MAX})")
+            sim.fail(f"check conduction sub-steps: heat conduction needs {nsub} sub-steps of "
+                     f"{lim:.3e} s per step of {dt:.3e} s (more than {NSUB_MAX})")
             nsub = NSUB_MAX
         self.nsub = nsub
         return nsub

@@ -15,6 +15,7 @@ rebuild makes the ghosts; the result is bit-identical to the run that never stop
 
 import json
 import os
+import tomllib
 
 import h5py
 import numpy as np
@@ -60,8 +61,18 @@ class Checkpoint:
         self.state, self.batch, self.arrays = state, batch, arrays
 
 
+# The state entries every checkpoint holds (numbers), and the driver arrays
+STATE_KEYS = ("t", "nstep", "dt", "dt_prev", "nframe", "frames_k", "samples_k", "gauges_k",
+              "checkpoint_k")
+ARRAY_KEYS = ("energy_rows", "energy_ref")
+
+
 def read_checkpoint(path, fields):
-    """Read a checkpoint (every rank); InputError naming the file when it cannot be used."""
+    """Read a checkpoint (every rank); InputError naming the file when it cannot be used.
+
+    Read by schema: attributes are JSON and TOML text, datasets plain float arrays; a file
+    that lacks an entry or whose buffers do not add up is refused, never half used.
+    """
     try:
         with h5py.File(path, "r") as f:
             if f.attrs.get("format") != FORMAT:
@@ -72,13 +83,48 @@ def read_checkpoint(path, fields):
                 raise InputError(f"--restart: {path} holds fields {names}; this scene needs "
                                  f"{[fl.name for fl in fields]} (different effects or model)")
             state = json.loads(f.attrs["state"])
-            scene_text = f.attrs["scene"]
-            data, sizes = f["buffers"][...], f["buffer_sizes"][...]
-            arrays = {k: f["driver"][k][...] for k in f["driver"]} if "driver" in f else {}
+            scene_text = str(f.attrs["scene"])
+            data = np.asarray(_numbers(f["buffers"]), np.float64)
+            sizes = np.asarray(_numbers(f["buffer_sizes"]), np.int64)
+            arrays = {k: _numbers(f["driver"][k]) for k in f["driver"]} if "driver" in f else {}
+        tomllib.loads(scene_text)
+        batch = _bodies(fields, data, sizes)
     except OSError as exc:
         raise InputError(f"--restart: cannot read {path}: {exc}") from None
+    except (KeyError, ValueError, TypeError, IndexError, OverflowError) as exc:
+        # json and TOML decode errors are ValueErrors; a missing entry is a KeyError
+        raise InputError(f"--restart: {path} is not a complete pdfem checkpoint "
+                         f"({type(exc).__name__}: {_one_line(exc)})") from None
+    bad = [k for k in STATE_KEYS if not isinstance(state, dict) or isinstance(
+        state.get(k), bool) or not isinstance(state.get(k), (int, float))]
+    bad += [k for k in ARRAY_KEYS if k not in arrays]
+    if bad:
+        raise InputError(f"--restart: {path} is not a complete pdfem checkpoint (no {bad[0]})")
+    return Checkpoint(path, scene_text, state, batch, arrays)
+
+
+def _numbers(dset):
+    """A dataset's values when they are numbers (never objects or strings)."""
+    if not isinstance(dset, h5py.Dataset) or dset.dtype.kind not in "biuf":
+        raise TypeError(f"{dset.name} is not a numeric dataset")
+    return dset[...]
+
+
+def _bodies(fields, data, sizes):
+    """The bodies of the gathered rank buffers as one Batch; ValueError if they do not add
+    up to the stored data."""
+    if data.ndim != 1 or sizes.ndim != 1 or (sizes < 0).any() or sizes.sum() != data.size:
+        raise ValueError("buffer sizes do not add up to the stored buffers")
     parts, off = [], 0
     for n in sizes:
-        parts.append(Batch.from_buffer(fields, data[off:off + n])[0])
+        part, used = Batch.from_buffer(fields, data[off:off + n])
+        if used != n:
+            raise ValueError(f"a rank buffer holds {n} values, its bodies {used}")
+        parts.append(part)
         off += n
-    return Checkpoint(path, scene_text, state, Batch.concat(fields, parts), arrays)
+    return Batch.concat(fields, parts)
+
+
+def _one_line(exc):
+    """An exception's message on one line."""
+    return " ".join(str(exc).split())

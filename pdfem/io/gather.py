@@ -22,8 +22,10 @@ def to_blocks(comm, index, rows, n):
     must be supplied by exactly one rank.
     """
     size, rank = comm.size, comm.rank
-    rows = np.ascontiguousarray(rows, np.float64).reshape(index.shape[0], -1)
-    k = rows.shape[1]
+    rows = np.ascontiguousarray(rows, np.float64)
+    # Columns per row from the trailing shape (a rank with no rows still knows it)
+    k = int(np.prod(rows.shape[1:], dtype=np.int64)) if rows.ndim > 1 else 1
+    rows = rows.reshape(index.shape[0], k)
     dest = np.minimum((index * size) // max(n, 1), size - 1) if n else np.zeros(0, np.int64)
     # Exact block owner (integer division can be off by one at block edges)
     lo_of = np.array([block_bounds(n, size, r)[0] for r in range(size)] + [n])

@@ -6,7 +6,8 @@ Layout (everything by global id, so 1-rank and N-rank files compare equal):
     /frames/time (F,), /frames/x (F,NN,2), /frames/v (F,NN,2), /frames/stress (F,NE,nip,4),
     /frames/temperature (F,NN) (only with [heat])
     /energy/time (E,) and one (E,) dataset per term, plus /energy/balance_error
-    /gauges/time (G,), /gauges/NAME/velocity (G,2), /gauges/NAME/stress (G,4) (with [[gauges]])
+    /gauges/time (G,), /gauges/NAME/velocity (G,2), /gauges/NAME/stress (G,4),
+    /gauges/NAME/elements (the gauge's element ids; attribute body) (with [[gauges]])
     attributes: scene (resolved TOML), effects, pdfem version
 The file is written as ``<path>.part`` and renamed to ``<path>`` only when complete.
 """
@@ -222,9 +223,15 @@ class RunWriter:
             sub = g.create_group(name)
             ds.append((sub.create_dataset("velocity", (n, 2), "f8"),
                        sub.create_dataset("stress", (n, 4), "f8")))
+        # The element ids as a dataset: an attribute holds at most 64 KiB (8192 elements)
+        elem_ds = []
         for (gid, elems), name in zip(gauges.sets, gauges.names, strict=True):
             g[name].attrs["body"] = gid
-            g[name].attrs["elements"] = elems
+            elem_ds.append((g[name].create_dataset("elements", (len(elems),), "i8"), elems))
+        if comm.rank == 0:
+            for d, elems in elem_ds:
+                if len(elems):
+                    d[:] = elems
         if comm.rank == 0 and n:
             t[:] = hist[0]
             for i, (dv, dsig) in enumerate(ds):

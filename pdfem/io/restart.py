@@ -67,7 +67,9 @@ class Checkpointer:
         and starts a new file when a kill has torn it."""
         sim = self.sim
         state = {"nframe": writer.nframe, "frames_k": frames.k, "samples_k": samples.k,
-                 "gauges_k": gsched.k, "checkpoint_k": self.k, "run_file": writer.tmp}
+                 "gauges_k": gsched.k, "checkpoint_k": self.k, "run_file": writer.tmp,
+                 "contact_cap": sim.contact_cap, "safety": sim.safety,
+                 "dt_retries_left": sim.guards.retries_left}
         arrays = {}
         if sim.comm.rank == 0:
             arrays["energy_rows"] = np.array(rows)

@@ -38,7 +38,10 @@ from pdfem.kernels.contact_law import (
     P_KS,
     P_MU,
     P_RCAP,
+    P_ZETA,
     contact_dt,
+    damped_normal,
+    effective_mass,
     normal_force,
     shear_update,
 )
@@ -65,7 +68,8 @@ R_NX = 7  # unit normal from A (pairs[p, 0]) into B, x
 R_NY = 8  # unit normal, y
 R_CX = 9  # contact point (overlap centroid), x
 R_CY = 10  # contact point, y
-NRES = 11
+R_DAMP = 11  # dissipation of the normal damping in this step, (F_n - F_n elastic) dh [J/m]
+NRES = 12
 
 # Codes of active[p]; negative codes are guards the caller must treat as errors
 C_NONE = 0  # no overlap: no force, history reset
@@ -169,12 +173,14 @@ def _clear(p, us_keep, active, nodes, weights, fa, us_out, res, code):
 
 
 @njit(cache=True)
-def _law(p, area, width, nx, ny, cx, cy, dus, us, params, fa, us_out, res, sg):
+def _law(p, area, width, nx, ny, cx, cy, dus, us, params, fa, us_out, res, sg, dh, dt, meff):
     """Contact law at pair p with the parameters params[p] (indexed in place, no row view);
-    writes fa (sign sg: -1 when the caller's A is our B) and res."""
+    writes fa (sign sg: -1 when the caller's A is our B) and res. dh: separation of the
+    sides along n in this step of length dt; meff: their effective mass (normal damping)."""
     delta = area / width
-    fn, kn, en = normal_force(delta, width, params[p, P_KN0], params[p, P_DMAX],
-                               params[p, P_RCAP])
+    fe, kn, en = normal_force(delta, width, params[p, P_KN0], params[p, P_DMAX],
+                              params[p, P_RCAP])
+    fn = damped_normal(fe, kn, dh / dt if dt > 0.0 else 0.0, meff, params[p, P_ZETA])
     us_new, fs, diss = shear_update(us, dus, width, params[p, P_KS], params[p, P_MU], fn)
     # Force on A: normal (fn <= 0 pushes A back along -n) plus shear along t
     tx = -ny
@@ -193,15 +199,18 @@ def _law(p, area, width, nx, ny, cx, cy, dus, us, params, fa, us_out, res, sg):
     res[p, R_NY] = sg * ny
     res[p, R_CX] = cx
     res[p, R_CY] = cy
+    res[p, R_DAMP] = (fn - fe) * dh
 
 
 @njit(cache=True)
 def element_pair_forces(
-    x, du, conn, ebnd, egid, eloc, pairs, params, us_in, active, nodes, weights, fa, us_out, res
+    x, du, conn, ebnd, egid, eloc, pairs, params, us_in, active, nodes, weights, fa, us_out, res,
+    m, dt
 ):
     """Contact forces of the element pairs pairs (np, 2) (elements of different bodies).
 
-    x, du (nn, 2): positions and displacement increments of the step; conn (ne, 4) int64 CCW;
+    x, du (nn, 2): positions and displacement increments of the step (du / dt is the velocity
+    the normal damping sees; dt = 0: none); m (nn,) lumped masses; conn (ne, 4) int64 CCW;
     ebnd (ne, 4) int8 boundary-edge flags; egid, eloc (ne,) int64 global element key; params
     (np, NPAR) law parameters (contact_law.P_*); us_in (np,) shear history. Outputs: see module
     docstring. Returns the number of guarded contacts (active < 0).
@@ -247,7 +256,11 @@ def element_pair_forces(
         dbx, dby = _edge_du(du, b1, b2, sb)
         dus = (dbx - dax) * -ny + (dby - day) * nx
         sg = -1.0 if flip else 1.0
-        _law(p, area, width, nx, ny, cx, cy, dus, us_in[p], params, fa, us_out, res, sg)
+        # Separation along n and effective mass of the two edges, for the damping
+        dh = (dbx - dax) * nx + (dby - day) * ny
+        meff = effective_mass(min(m[a1], m[a2]), min(m[b1], m[b2]))
+        _law(p, area, width, nx, ny, cx, cy, dus, us_in[p], params, fa, us_out, res, sg, dh, dt,
+             meff)
         # Nodal layout in the caller's order (a1, a2, b1, b2)
         active[p] = C_ACTIVE
         j = 2 if flip else 0
@@ -279,6 +292,8 @@ def element_wall_forces(
     fa,
     us_out,
     res,
+    m,
+    dt,
 ):
     """Contact forces between elements elems (nw,) and rigid walls (increment zero).
 
@@ -313,7 +328,9 @@ def element_wall_forces(
         # Relative increment of the (fixed) wall with respect to the element, along t
         dax, day = _edge_du(du, e1, e2, se)
         dus = -dax * -ny - day * nx
-        _law(p, area, width, nx, ny, cx, cy, dus, us_in[p], params, fa, us_out, res, 1.0)
+        dh = -(dax * nx + day * ny)
+        _law(p, area, width, nx, ny, cx, cy, dus, us_in[p], params, fa, us_out, res, 1.0, dh, dt,
+             min(m[e1], m[e2]))
         active[p] = C_ACTIVE
         nodes[p, 0] = e1
         nodes[p, 1] = e2
@@ -349,7 +366,7 @@ def accumulate_sorted(order, active, nodes, weights, fa, n_owned, f):
 
 
 @njit(cache=True)
-def contact_dt_min(active, nodes, res, m, x):
+def contact_dt_min(active, nodes, res, m, x, zeta):
     """Smallest stable step over the active contacts (contact_law.contact_dt).
 
     The stiffness is the current tangent stiffness res[:, R_STIFF] scaled from the overlap
@@ -374,7 +391,7 @@ def contact_dt_min(active, nodes, res, m, x):
             k *= span / res[p, R_WIDTH]
         ma = min(m[nodes[p, 0]], m[nodes[p, 1]])
         mb = np.inf if nodes[p, 2] < 0 else min(m[nodes[p, 2]], m[nodes[p, 3]])
-        dt = min(dt, contact_dt(ma, mb, k))
+        dt = min(dt, contact_dt(ma, mb, k, zeta))
     return dt
 
 
@@ -388,7 +405,7 @@ def max_speed(v, n0, n1):
 
 
 @njit(cache=True)
-def entry_dt_min(x, conn, ebnd, m, e0, e1, kn0):
+def entry_dt_min(x, conn, ebnd, m, e0, e1, kn0, zeta):
     """Stable step of a contact about to begin, over the boundary edges of elements [e0, e1).
 
     A contact can start on any boundary edge during a step; its stiffness is then at least
@@ -407,5 +424,5 @@ def entry_dt_min(x, conn, ebnd, m, e0, e1, kn0):
             dx = x[b, 0] - x[a, 0]
             dy = x[b, 1] - x[a, 1]
             le = np.sqrt(dx * dx + dy * dy)
-            dt = min(dt, contact_dt(min(m[a], m[b]), np.inf, kn0 * le))
+            dt = min(dt, contact_dt(min(m[a], m[b]), np.inf, kn0 * le, zeta))
     return dt

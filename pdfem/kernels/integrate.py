@@ -18,7 +18,9 @@ ACC_FRIC = 2  # energy dissipated by contact friction [J/m]
 ACC_CWORK = 3  # work done by contact forces on the body [J/m]
 ACC_DAMP_P = 4  # damping dissipation of the current step's later half interval (pending)
 ACC_BC_P = 5  # reaction work of the current step's later half interval (pending)
-NACC = 6
+ACC_CWORK_P = 6  # contact work of the current step's later half interval (pending)
+ACC_CDAMP = 7  # energy dissipated by the contacts' normal damping [J/m]
+NACC = 8
 
 
 @njit(cache=True)
@@ -40,24 +42,28 @@ def advance_positions(x, v, dt, n1, du):
 
 
 @njit(cache=True)
-def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin, first):
-    """Eq. 68 with boundary conditions; accumulate damping and reaction work per body.
+def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin, first, fc):
+    """Eq. 68 with boundary conditions; accumulate damping, reaction and contact work per body.
 
     bcf[i, k]: 0 free, 1 fixed (velocity 0), 2 prescribed velocity bcv[i, k].
     kin[b] receives the product-form kinetic energy of body b at the current whole step.
     A force F_n acting at step n does work dt F_n v_{n-1/2}/2 in the interval before the
     step and dt F_n v_{n+1/2}/2 in the one after; the second half is kept pending until the
     next step, so that K_n + U_n and the accumulated work balance exactly at every step.
-    ``first`` marks the start-up half step, which has no interval before it.
+    ``first`` marks the start-up half step, which has no interval before it. fc (nn, 2) is
+    the contacts' share of f, whose work is accumulated the same way; shape (0, 2): none.
     """
+    contact = fc.shape[0] > 0
     c1, c2 = damping_coefficients(gamma, dt)
     # Pending halves of the previous step belong to the interval that just ended
     for b in range(kin.shape[0]):
         kin[b] = 0.0
         acc[b, ACC_DAMP] += acc[b, ACC_DAMP_P]
         acc[b, ACC_BC] += acc[b, ACC_BC_P]
+        acc[b, ACC_CWORK] += acc[b, ACC_CWORK_P]
         acc[b, ACC_DAMP_P] = 0.0
         acc[b, ACC_BC_P] = 0.0
+        acc[b, ACC_CWORK_P] = 0.0
     before = 0.0 if first else 1.0
     for i in range(n1):
         b = node_body[i]
@@ -76,6 +82,9 @@ def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin, fi
             fd = gamma * mi * 0.5 * (vnew + vold)
             acc[b, ACC_DAMP] += before * 0.5 * dt * fd * vold
             acc[b, ACC_DAMP_P] += 0.5 * dt * fd * vnew
+            if contact:
+                acc[b, ACC_CWORK] += before * 0.5 * dt * fc[i, k] * vold
+                acc[b, ACC_CWORK_P] += 0.5 * dt * fc[i, k] * vnew
             kin[b] += 0.5 * mi * vold * vnew
             v[i, k] = vnew
 

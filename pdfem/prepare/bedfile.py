@@ -66,6 +66,10 @@ def read_bed(path, name):
             state = np.asarray(g["state"][...], float) if "state" in g else None
     except OSError as exc:
         raise SceneError("grains_file.path", f"cannot read {path}: {exc}") from None
+    except (KeyError, ValueError, TypeError, AttributeError) as exc:
+        # An entry of the wrong kind (a group for a dataset, strings for numbers)
+        raise SceneError(where, f"not a complete bed file ({type(exc).__name__}: "
+                         f"{' '.join(str(exc).split())})") from None
     n = cols["x"].shape[0]
     if nodes.ndim != 3 or nodes.shape[0] != n or nodes.shape[2] != 2 or vel.shape != nodes.shape:
         raise SceneError(where, f"/grains/nodes and /grains/velocity must have shape (n, nn, 2) "

@@ -38,7 +38,7 @@ from pdfem.errors import InputError
 from pdfem.mesh.ellipse import ellipse_mesh
 from pdfem.prepare.bedfile import write_bed
 from pdfem.prepare.rain import rain_grains
-from pdfem.scene import load_scene, parse_scene
+from pdfem.scene import check_ranks, load_scene, parse_scene
 from pdfem.scene.schema import HEAT_EFFECTS
 from pdfem.solver import Simulation
 
@@ -205,6 +205,7 @@ def prepare(path, out, comm, log=_log):
                                      f"{box[3]:g} m)")
             doc = _phase_doc(base, pr, phase, grains, bed, weight_box)
             sc = parse_scene(doc, scene.base_dir, name=f"{path} ({phase} phase)")
+            check_ranks(sc, comm.size, f"{path} ({phase} phase)")
             limit = SETTLE_STEPS if phase == "settle" else 2**62
             sim, figs[phase] = _run_phase(phase, sc, comm, threshold, log, limit)
             state = _gather_grains(sim)

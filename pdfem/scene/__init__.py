@@ -7,6 +7,7 @@ lives in :mod:`pdfem.scene.schema`; docs/scene-reference.md is generated from it
 ``python -m pdfem.scene.reference``.
 """
 
+import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -18,7 +19,15 @@ from pdfem.scene.toml_out import dumps
 from pdfem.scene.validate import resolve
 from pdfem.scene.values import SceneError
 
-__all__ = ["Scene", "load_scene", "parse_scene"]
+__all__ = ["Scene", "check_ranks", "load_scene", "parse_scene"]
+
+# Problem sizes beyond which a scene is refused (a typo, not a run: memory would run out)
+MAX_CELLS = 10**7
+MAX_BLOCK_ELEMENTS = 10**7
+MAX_GRAINS = 10**7
+# Initial and prescribed speeds must be below the speed of light [m/s] (larger ones are typos
+# and overflow the kinetic energy)
+LIGHT_SPEED = 299792458.0
 
 
 @dataclass(eq=False)
@@ -78,14 +87,67 @@ def parse_scene(text_or_dict, base_dir=".", name="<scene>", path=None):
     # Schema, defaults, geometry
     base = Path(base_dir)
     try:
-        resolved, grains, mat_ids, _ = resolve(doc, base)
+        resolved, grains, mat_ids, label = resolve(doc, base)
     except SceneError as exc:
         raise InputError(f"{name}: {_one_line(exc)}") from None
+    _check_sizes(resolved, name)
+    _check_speeds(resolved, grains, label, name)
     for k in ("center", "axes", "angle", "velocity"):
         grains[k] = np.ascontiguousarray(grains[k], dtype=np.float64)
     return Scene(resolved=resolved, path=None if path is None else Path(path), base_dir=base,
                  grains=grains, materials=mat_ids, blocks=resolved["blocks"],
                  bcs=resolved["bc"])
+
+
+def grid_shape(resolved):
+    """(nx, ny) of the contact cell grid of a resolved scene, as partition.CellGrid makes it
+    (floats: a huge grid is reported, not allocated)."""
+    x0, y0, x1, y1 = resolved["domain"]["box"]
+    h = resolved["domain"]["cell_size"]
+    return tuple(max(1.0, float(math.floor(q))) if math.isfinite(q) else q
+                 for q in ((x1 - x0) / h, (y1 - y0) / h))
+
+
+def _check_sizes(r, name):
+    """Cell grid, block meshes and rained grains within what a run can hold."""
+    nx, ny = grid_shape(r)
+    if not nx * ny <= MAX_CELLS:
+        raise InputError(f"{name}: domain.cell_size: the cell grid would have {nx * ny:.3g} "
+                         f"cells ({nx:.3g} x {ny:.3g}), more than {MAX_CELLS:.0e}: use a larger "
+                         "cell_size or a smaller domain.box")
+    for i, b in enumerate(r["blocks"]):
+        if not b["nx"] * b["ny"] <= MAX_BLOCK_ELEMENTS:
+            raise InputError(f"{name}: blocks[{i}].nx: {b['nx']} x {b['ny']} elements, more "
+                             f"than {MAX_BLOCK_ELEMENTS:.0e}")
+    if "prepare" in r and r["prepare"]["grains"] > MAX_GRAINS:
+        raise InputError(f"{name}: prepare.grains: must be <= {MAX_GRAINS:.0e} (got "
+                         f"{r['prepare']['grains']})")
+
+
+def _check_speeds(r, grains, label, name):
+    """Every velocity of the scene below the speed of light."""
+    given = [(f"blocks[{i}].velocity", b["velocity"]) for i, b in enumerate(r["blocks"])]
+    given += [(f"bc[{i}].velocity", b["velocity"]) for i, b in enumerate(r["bc"])
+              if "velocity" in b]
+    if "prepare" in r:
+        given.append(("prepare.drop_velocity", [r["prepare"]["drop_velocity"]]))
+    fast = np.nonzero(~(np.abs(grains["velocity"]) < LIGHT_SPEED).all(axis=1))[0]
+    if fast.size:
+        given.insert(0, (f"{label(int(fast[0]))}: velocity",
+                         grains["velocity"][fast[0]].tolist()))
+    for where, v in given:
+        if not all(abs(c) < LIGHT_SPEED for c in v):
+            raise InputError(f"{name}: {where}: must be below the speed of light "
+                             f"{LIGHT_SPEED:.6g} m/s (got {v})")
+
+
+def check_ranks(scene, nranks, name=None):
+    """Every rank needs a cell of the grid: InputError naming domain.cell_size otherwise."""
+    nx, ny = grid_shape(scene.resolved)
+    if nranks > nx * ny:
+        raise InputError(f"{name or scene.path}: domain.cell_size: the cell grid has "
+                         f"{int(nx * ny)} cell(s) ({int(nx)} x {int(ny)}), fewer than the "
+                         f"{nranks} ranks: start fewer ranks or use a smaller cell_size")
 
 
 def _one_line(exc):

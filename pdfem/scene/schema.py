@@ -140,6 +140,12 @@ ELEMENT = {
                  hi=10),
 }
 
+# [bulk_viscosity]
+BULK_VISCOSITY = {
+    "quadratic": _nonneg("float", 1.5, "quadratic (von Neumann-Richtmyer) coefficient"),
+    "linear": _nonneg("float", 0.06, "linear coefficient"),
+}
+
 # [gravity]
 GRAVITY = {"g": Key("vec2", [0.0, -9.81], "gravitational acceleration [gx, gy]", "m/s^2")}
 
@@ -245,6 +251,9 @@ CONTACT = {
                       "run)", "m"),
     "ks": _nonneg("float", Derived("0.5 kn0"), "tangential penalty stiffness", "Pa/m"),
     "friction": _nonneg("float", 0.0, "Coulomb friction coefficient"),
+    "damping": Key("float", 0.0, "normal damping, fraction of the critical damping of the "
+                   "contact spring (0 = the report's undamped law); about 0.5 keeps the "
+                   "boundary nodes of grains from bouncing off a hammer at km/s", lo=0.0, hi=1.0),
 }
 
 # [contact.pairs."mat1:mat2"]: per material pair overrides
@@ -254,6 +263,8 @@ CONTACT_PAIR = {
     "ks": _nonneg("float", Derived("contact.ks if given, else 0.5 kn0 of the pair"),
                   "tangential penalty stiffness", "Pa/m"),
     "friction": _nonneg("float", Derived("contact.friction"), "Coulomb friction coefficient"),
+    "damping": Key("float", Derived("contact.damping"), "normal damping ratio", lo=0.0,
+                   hi=1.0),
 }
 
 # [heat] and the effects that need it
@@ -364,6 +375,20 @@ OUTPUT = {
                                "none", "s"),
 }
 
+# [guards]
+GUARDS = {
+    "energy_drift": _nonneg("float", 0.1, "stop when the energy-balance error exceeds this "
+                            "(checked at every energy sample); 0 = never"),
+    "snapshot_steps": Key("int", 200, "steps between in-memory copies of the state: the last "
+                          "good state written on a failure is at most this old", lo=1),
+    "dt_retries": _nonneg("int", 0, "remedy: on a failed check, go back to the last good "
+                          "state and halve the time step, at most this many times; 0 = off"),
+    "cap_contact": Key("str", "off", "remedy: \"element\" caps kn0 and the hardening of "
+                       "every contact law so that no contact limits the time step below the "
+                       "elements' initial stable step (needs [contact])",
+                       choices=("off", "element")),
+}
+
 # [run]
 RUN = {"seed": _nonneg("int", 0, "seed of any randomness (reserved; runs are reproducible)")}
 
@@ -377,6 +402,10 @@ SECTIONS = [
             GRAVITY),
     Section("damping", "table", "Mass-proportional damping. Active only when the table is "
             "present.", DAMPING),
+    Section("bulk_viscosity", "table", "Artificial bulk viscosity: a pressure q = rho (c_quad "
+            "L^2 rate^2 + c_lin c L |rate|) in elements whose area shrinks (L = sqrt(area)); "
+            "shocks spread over a few elements instead of collapsing them. Its work is counted "
+            "as dissipated. Active only when the table is present.", BULK_VISCOSITY),
     Section("materials", "named", "One table per material, `[materials.NAME]`, NAME matching "
             f"`{NAME_PATTERN}`; at least one. Material ids follow the order of the tables.",
             MATERIAL_COMMON, required=True),
@@ -427,12 +456,17 @@ SECTIONS = [
             "rained into the chamber, a weight dropped on them, relaxation; ignored by "
             "`run`.", PREPARE),
     Section("output", "table", "The HDF5 output file.", OUTPUT),
+    Section("guards", "table", "Checks every step (non-finite values, inverted elements, "
+            "contact overlap beyond delta_max, energy drift): a failed check stops every rank "
+            "with exit status 3 and writes the last good state as a checkpoint; optional "
+            "remedies.", GUARDS),
     Section("run", "table", "Run control.", RUN),
 ]
 
 # Tables that appear in the resolved scene only when given (their presence is the effect)
-PRESENCE_TABLES = ("gravity", "damping", "grains_file", "walls", "contact", "heat",
-                   "conduction", "dissipation_heating", "thermoelastic", "thermal_expansion",
-                   "temperature_dependence", "contact_conductance", "friction_heating")
+PRESENCE_TABLES = ("gravity", "damping", "bulk_viscosity", "grains_file", "walls", "contact",
+                   "heat", "conduction", "dissipation_heating", "thermoelastic",
+                   "thermal_expansion", "temperature_dependence", "contact_conductance",
+                   "friction_heating")
 # The heat effects: each needs [heat]
-HEAT_EFFECTS = PRESENCE_TABLES[6:]
+HEAT_EFFECTS = PRESENCE_TABLES[7:]

@@ -37,7 +37,7 @@ def resolve(doc, base_dir):
             raise SceneError(name, f"required table [{name}] missing")
     r = {}
     # Plain tables
-    for name in ("domain", "time", "element", "gravity", "damping"):
+    for name in ("domain", "time", "element", "gravity", "damping", "bulk_viscosity"):
         if name in doc or name not in S.PRESENCE_TABLES:
             r[name] = check_table(doc.get(name, {}), secs[name].keys, name)
     _time_rules(r["time"])
@@ -81,6 +81,9 @@ def resolve(doc, base_dir):
         r["shock"] = _shock(doc["shock"], r)
     if "prepare" in doc:
         r["prepare"] = _prepare(doc["prepare"], r, mat_ids)
+    r["guards"] = check_table(doc.get("guards", {}), S.GUARDS, "guards")
+    if r["guards"]["cap_contact"] != "off" and "contact" not in r:
+        raise SceneError("guards.cap_contact", "needs the [contact] table")
     r["run"] = check_table(doc.get("run", {}), S.RUN, "run")
     # Geometry at t=0
     if rows is not None and "nodes" in rows.arrays:
@@ -120,10 +123,12 @@ def _materials(value):
         if not _NAME.fullmatch(name):
             raise SceneError(path, f"bad material name (must match {S.NAME_PATTERN})")
         model = table(tbl, path).get("model", "elastic")
+        # (a model that is not a string is reported by check_table: not hashable here)
+        known = isinstance(model, str) and model in S.MATERIAL_MODELS
         keys = dict(S.MATERIAL_COMMON)
-        if model in S.MATERIAL_MODELS:
+        if known:
             keys.update(S.MATERIAL_MODELS[model])
-        hint = f' for model "{model}"' if model in S.MATERIAL_MODELS else ""
+        hint = f' for model "{model}"' if known else ""
         m = check_table(tbl, keys, path, hint)
         MODEL_RULES.get(m["model"], lambda m, p: None)(m, path)
         out[name] = m
@@ -237,6 +242,7 @@ def _contact(value, mat_ids):
         p.setdefault("delta_max", c["delta_max"])
         p.setdefault("ks", c["ks"] if ks_given else 0.5 * p["kn0"])
         p.setdefault("friction", c["friction"])
+        p.setdefault("damping", c["damping"])
         pairs[name] = {k: p[k] for k in S.CONTACT_PAIR}
     c["pairs"] = pairs
     return c
@@ -285,6 +291,8 @@ def _output(value, t_end, heat, cap=False, contact=False):
                            ("contact_force", contact, "the [contact] table")):
         if name in o["fields"] and not ok:
             raise SceneError("output.fields", f'"{name}" needs {need}')
+    if "x" not in o["fields"]:
+        raise SceneError("output.fields", 'must list "x" (the node positions of every frame)')
     o.setdefault("interval", t_end / 20.0)
     o.setdefault("energy_interval", o["interval"] / 10.0)
     o.setdefault("gauge_interval", o["energy_interval"] / 10.0)

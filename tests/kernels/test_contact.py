@@ -62,10 +62,10 @@ def ref_overlap(p, q):
     return area, np.array([cx, cy])
 
 
-def law_params(n, kn0=1e9, dmax=0.2, ks=5e8, mu=0.3, rcap=0.95):
+def law_params(n, kn0=1e9, dmax=0.2, ks=5e8, mu=0.3, rcap=0.95, zeta=0.0):
     p = np.empty((n, L.NPAR))
     p[:, L.P_KN0], p[:, L.P_DMAX], p[:, L.P_KS] = kn0, dmax, ks
-    p[:, L.P_MU], p[:, L.P_RCAP] = mu, rcap
+    p[:, L.P_MU], p[:, L.P_RCAP], p[:, L.P_ZETA] = mu, rcap, zeta
     return p
 
 
@@ -88,9 +88,10 @@ def outputs(n):
     )
 
 
-def run_pairs(x, du, conn, ebnd, egid, eloc, pairs, params, us):
+def run_pairs(x, du, conn, ebnd, egid, eloc, pairs, params, us, m=None, dt=0.0):
     out = outputs(len(pairs))
-    nbad = C.element_pair_forces(x, du, conn, ebnd, egid, eloc, pairs, params, us, *out)
+    m = np.ones(len(x)) if m is None else m
+    nbad = C.element_pair_forces(x, du, conn, ebnd, egid, eloc, pairs, params, us, *out, m, dt)
     return nbad, out
 
 
@@ -438,7 +439,8 @@ def test_wall_contact():
     wn = np.array([[0.0, 1.0], [0.0, 1.0], [0.0, 1.0]])
     par = law_params(3, kn0=1e9, dmax=0.2, ks=1e9, mu=0.5)
     out = outputs(3)
-    nbad = C.element_wall_forces(x, du, conn, ebnd, elems, p0, wn, par, np.zeros(3), *out)
+    nbad = C.element_wall_forces(x, du, conn, ebnd, elems, p0, wn, par, np.zeros(3), *out,
+                                 np.ones(len(x)), 0.0)
     act, nodes, w, fa, uso, res = out
     assert nbad == 1 and list(act) == [C.C_ACTIVE, C.C_NONE, C.C_INSIDE]
     fn = L.normal_force(0.05, 1.0, 1e9, 0.2, 0.95)[0]
@@ -470,7 +472,7 @@ def test_accumulate_order_and_ghosts():
     # Stable step over the contacts
     m = rng.uniform(1.0, 2.0, len(x))
     res = out[5]
-    dt = C.contact_dt_min(act, nodes, res, m, x)
+    dt = C.contact_dt_min(act, nodes, res, m, x, 0.0)
     # Reference: stiffness scaled from the overlap width to the longest contact edge
     ref = np.inf
     for p in np.nonzero(act == C.C_ACTIVE)[0]:

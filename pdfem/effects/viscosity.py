@@ -1,0 +1,42 @@
+"""Artificial bulk viscosity (scene table [bulk_viscosity]): shocks spread over a few
+elements instead of ringing or collapsing them (pdfem.kernels.viscosity)."""
+
+import numpy as np
+
+from pdfem.effects.base import Effect
+from pdfem.kernels.integrate import body_sums
+from pdfem.kernels.viscosity import bulk_viscosity_dt, bulk_viscosity_forces
+from pdfem.store import ELEM, Field
+
+
+class BulkViscosity(Effect):
+    """Viscous pressure of compressing elements; its work is a dissipated energy term."""
+
+    name = "bulk_viscosity"
+    extra_fields = (Field("qv", ELEM, (), np.float64), Field("ewq", ELEM, (), np.float64))
+
+    def __init__(self, table, scene):
+        super().__init__(table, scene)
+        self.c_quad = float(table["quadratic"])
+        self.c_lin = float(table["linear"])
+
+    def body_force(self, sim):
+        s = sim.store
+        with sim.timers.phase("elements"):
+            bulk_viscosity_forces(s.x, sim.du, s.conn, s.emat, sim.mat_params, 0, s.ne_own,
+                                  getattr(sim, "dt", 0.0), self.c_quad, self.c_lin, s.qv, s.ewq,
+                                  sim.f)
+
+    def stable_dt(self, sim):
+        s = sim.store
+        return bulk_viscosity_dt(s.x, sim.du, s.conn, s.emat, sim.mat_params, 0, s.ne_own,
+                                 getattr(sim, "dt", 0.0), self.c_quad, self.c_lin)
+
+    def dt_limiter(self, sim, dt):
+        return "the element wave speed with bulk viscosity"
+
+    def energy_terms(self, sim, out):
+        s = sim.store
+        col = np.empty(s.nb_own)
+        body_sums(s.ewq, s.estart[: s.nb_own], s.ne[: s.nb_own], col)
+        out["viscous"] = col

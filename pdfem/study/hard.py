@@ -1,0 +1,205 @@
+"""``pdfem study hard``: the hard cases (pdfem.study.hard_cases) on 1 and on N ranks.
+
+Started under mpirun with N >= 2 ranks. Each case runs first on rank 0 alone (a communicator
+of its own), then on all N ranks; rank 0 then reads both run files and reports, per case:
+
+- status: ``ok``, or the guard that stopped the run (its one-line message);
+- the largest energy-balance error over the run (``energy/balance_error``), against 2 %;
+- finite: every frame dataset holds only finite numbers;
+- the smallest Jacobian at the integration points of the element rule over every element of
+  every frame (> 0: none inverted; the guard checks the same every step), the smallest corner
+  Jacobian (a corner of a coarse grain's kite element may fold while its integration points
+  stay valid: reported, not a failure) and the worst corner-Jacobian ratio of the last frame;
+- the contacts' absorbed energy beyond stored, friction and damping (contact_loss) of largest
+  magnitude over the run, over the largest energy term: not part of the pass criterion (the
+  balance holds it), reported because it is the overlap law's own departure from its stored
+  energy (pdfem.energy);
+- identical: every dataset of the two run files is bit-for-bit the same;
+- the figure the case is about (cells crossed per step, height left after squeezing,
+  conduction sub-steps, time step ...).
+
+A case passes when its run completes, the error is at most 2 %, everything is finite, no
+Jacobian is <= 0 and the two files are identical.
+"""
+
+import math
+import os
+import time
+
+import h5py
+import numpy as np
+from mpi4py import MPI
+
+from pdfem.errors import SimulationError
+from pdfem.study.hard_cases import CASES
+
+# Largest energy-balance error a hard case may show
+ENERGY_TOL = 0.02
+
+
+# Natural coordinates of the nodes (counter-clockwise) and of the 2x2 Gauss points
+XI = np.array([-1.0, 1.0, 1.0, -1.0])
+ETA = np.array([-1.0, -1.0, 1.0, 1.0])
+GP = 1.0 / math.sqrt(3.0)
+
+
+def jacobians(p, points):
+    """Jacobian determinants of quads p (ne, 4, 2) at natural points [(xi, eta), ...]:
+    (ne, len(points))."""
+    out = []
+    for xi, eta in points:
+        dxi = 0.25 * XI * (1.0 + eta * ETA)
+        deta = 0.25 * ETA * (1.0 + xi * XI)
+        xx, xy = p[:, :, 0] @ dxi, p[:, :, 0] @ deta
+        yx, yy = p[:, :, 1] @ dxi, p[:, :, 1] @ deta
+        out.append(xx * yy - xy * yx)
+    return np.stack(out, axis=1)
+
+
+def frame_checks(path):
+    """Checks of a run file: (every frame finite, smallest Jacobian at the integration points
+    of the scene's rule over all elements and frames, smallest corner Jacobian likewise,
+    worst corner-Jacobian ratio of the last frame (nan when a corner is <= 0), largest
+    energy-balance error)."""
+    import tomllib
+
+    with h5py.File(path, "r") as f:
+        finite = all(np.isfinite(f["frames"][k][...]).all() for k in f["frames"])
+        conn = f["mesh/conn"][...]
+        x = f["frames/x"][...]
+        err = float(np.max(f["energy/balance_error"][...]))
+        rule = tomllib.loads(f.attrs["scene"]).get("element", {}).get("rule", "1pt")
+    ips = [(0.0, 0.0)] if rule == "1pt" else [(GP * a, GP * b) for a, b in zip(XI, ETA,
+                                                                             strict=True)]
+    jmin = cmin = math.inf
+    ratio = math.nan
+    for k in range(x.shape[0]):
+        p = x[k][conn]
+        jmin = min(jmin, float(jacobians(p, ips).min()))
+        corner = jacobians(p, list(zip(XI, ETA, strict=True)))
+        cmin = min(cmin, float(corner.min()))
+        if k == x.shape[0] - 1 and corner.min() > 0:
+            ratio = float((corner.max(axis=1) / corner.min(axis=1)).max())
+    return finite, jmin, cmin, ratio, err
+
+
+def contact_loss_share(path):
+    """The contact_loss of largest magnitude over the run (signed: < 0 is energy the contact
+    law gave back beyond what it stored), over the largest energy term at its sample or at
+    t = 0 (the balance's scale)."""
+    from pdfem.energy import TERMS
+
+    with h5py.File(path, "r") as f:
+        e = f["energy"]
+        loss = e["contact_loss"][...]
+        i = int(np.argmax(np.abs(loss)))
+        scale = max(abs(float(e[t][j])) for t in TERMS for j in (0, i))
+        return float(loss[i]) / scale if scale > 0 else 0.0
+
+
+def identical(p1, p2):
+    """True when every dataset of two HDF5 files is the same, bit for bit."""
+    def load(path):
+        out = {}
+        with h5py.File(path, "r") as f:
+            f.visititems(lambda n, o: out.__setitem__(n, o[()])
+                         if isinstance(o, h5py.Dataset) else None)
+        return out
+
+    a, b = load(p1), load(p2)
+    return sorted(a) == sorted(b) and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def case_figure(name, sim):
+    """The figure a case is about, from its finished Simulation (words)."""
+    s = sim.store
+    if name == "fast-migration":
+        grid = sim.grid
+        speed = float(np.sqrt((s.v[: s.nn_own] ** 2).sum(axis=1)).max()) if s.nn_own else 0.0
+        speed = sim.comm.allreduce(speed, op=MPI.MAX)
+        cells = speed * sim.dt_prev / min(grid.hx, grid.hy)
+        return f"{cells:.1f} cells per step, rebuilds {sim.timers.calls['migration']}"
+    if name == "squeeze-50":
+        grain = s.isglobal[s.node_body[: s.nn_own]] == 0
+        y = s.x[: s.nn_own][grain, 1]
+        lo = sim.comm.allreduce(float(y.min()) if y.size else math.inf, op=MPI.MIN)
+        hi = sim.comm.allreduce(float(y.max()) if y.size else -math.inf, op=MPI.MAX)
+        r = sim.scene.resolved["grains"][0]["axes"][1]
+        return f"height {100 * (hi - lo) / (2 * r):.1f} % of the initial"
+    if name == "hot-conduction":
+        return f"conduction sub-steps per step {sim.heat.nsub}"
+    return f"dt {sim.dt_prev:.3g} s"
+
+
+def run_one(scene, comm, out):
+    """Run a scene on comm into out; (status, steps, wall s, case Simulation or None)."""
+    from pdfem.driver import run as drive
+    from pdfem.solver import Simulation
+
+    t0 = time.perf_counter()
+    try:
+        sim = Simulation(scene, comm)
+        summary = drive(sim, out, quiet=True)
+        status, steps = "ok", int(summary["steps"])
+    except SimulationError as exc:
+        sim, status, steps = None, f"failed: {exc}", 0
+    wall = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
+    return status, steps, wall, sim
+
+
+def run_case(name, folder, size, comm):
+    """Run one hard case on rank 0 alone and on every rank of comm; the result dict (rank 0;
+    None elsewhere)."""
+    from pdfem.scene import parse_scene
+
+    builder, what = CASES[name]
+    os.makedirs(folder, exist_ok=True)
+    # Rank 0 builds the scene (and writes its files), every rank parses the same dict
+    doc = builder(folder, size) if comm.rank == 0 else None
+    doc = comm.bcast(doc, root=0)
+    scene = parse_scene(doc, folder, name=f"hard case {name}")
+    out1, outn = os.path.join(folder, f"{name}-1.h5"), os.path.join(folder, f"{name}-n.h5")
+    for p in (out1, outn):
+        for suffix in ("", ".part", ".ckpt.h5"):
+            if comm.rank == 0 and os.path.exists(p + suffix):
+                os.remove(p + suffix)
+    comm.Barrier()
+    # One rank, then all
+    solo = comm.Split(0 if comm.rank == 0 else MPI.UNDEFINED, 0)
+    if comm.rank == 0:
+        status1, _, _, _ = run_one(scene, solo, out1)
+        solo.Free()
+    comm.Barrier()
+    status, steps, wall, sim = run_one(scene, comm, outn)
+    figure = case_figure(name, sim) if sim is not None else ""
+    if comm.rank != 0:
+        return None
+    row = {"case": name, "what": what, "ranks": comm.size, "status": status, "steps": steps,
+           "wall_s": wall, "figure": figure, "energy_error": math.nan, "finite": False,
+           "jacobian_min": math.nan, "corner_jacobian_min": math.nan,
+           "jacobian_ratio": math.nan, "identical": False, "contact_loss": math.nan}
+    if status == "ok" and status1 == "ok":
+        finite, jmin, cmin, ratio, err = frame_checks(outn)
+        row.update(energy_error=err, finite=finite, jacobian_min=jmin, corner_jacobian_min=cmin,
+                   jacobian_ratio=ratio, identical=identical(out1, outn),
+                   contact_loss=contact_loss_share(outn))
+    elif status == "ok":
+        row["status"] = f"1 rank {status1}"
+    row["passed"] = bool(row["status"] == "ok" and row["energy_error"] <= ENERGY_TOL
+                         and row["finite"] and row["jacobian_min"] > 0 and row["identical"])
+    return row
+
+
+def print_rows(rows, log=print):
+    """The study's table, one line per case."""
+    log(f"{'case':<16}{'steps':>8}{'wall s':>8}{'energy %':>10}{'c.loss %':>10}{'J ip > 0':>9}"
+        f"{'corner > 0':>11}{'J ratio':>9}{'finite':>8}{'1=N ranks':>10}  figure / status")
+    for r in rows:
+        ok = "PASS" if r["passed"] else "FAIL"
+        tail = r["figure"] if r["status"] == "ok" else r["status"]
+        log(f"{r['case']:<16}{r['steps']:>8}{r['wall_s']:>8.1f}"
+            f"{100 * r['energy_error']:>10.3f}{100 * r['contact_loss']:>10.2f}"
+            f"{str(r['jacobian_min'] > 0):>9}"
+            f"{str(r['corner_jacobian_min'] > 0):>11}"
+            f"{r['jacobian_ratio']:>9.2f}{str(r['finite']):>8}{str(r['identical']):>10}  "
+            f"{ok} {tail}")

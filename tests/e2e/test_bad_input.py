@@ -1,0 +1,217 @@
+"""Bad input never hurts, through the real command line.
+
+Every command on a missing file, a file that is not TOML or not HDF5, a truncated HDF5 file,
+a checkpoint of another scene, negative, zero, NaN or huge values, an unknown effect name, an
+output path that cannot be written and an output that exists: exit status 2, one line on
+stderr naming the file or key, no traceback, and the folder exactly as it was (no file
+added, none changed: nothing overwritten without --force, nothing partial left behind).
+"""
+
+import hashlib
+import os
+
+import numpy as np
+import pytest
+
+from tests.e2e.test_cli import datasets, pdfem
+from tests.scenes import drifting_grains, prep_scene, shock_scene
+
+# Two grains, a checkpoint every few steps
+GOOD = drifting_grains(n=2, end=1e-7).replace("interval = 2.5e-08",
+                                              "interval = 2.5e-08\ncheckpoint_interval = 5e-8")
+# A small shock scene with two inline grains between hammer and anvil
+SHOCK = shock_scene("none.h5", 1.0e-3, end=2e-7).replace(
+    '[grains_file]\npath = "none.h5"\nmaterial = "hmx"\n',
+    '[[grains]]\ncenter = [1.5e-4, 3.5e-4]\naxes = [1.0e-4, 1.0e-4]\nmaterial = "hmx"\n'
+    '[[grains]]\ncenter = [4.5e-4, 3.5e-4]\naxes = [1.0e-4, 1.0e-4]\nmaterial = "hmx"\n')
+
+
+def _scene(**edits):
+    """GOOD with text replacements (old=new pairs given as keyword tuples)."""
+    text = GOOD
+    for old, new in edits.values():
+        assert old in text, old
+        text = text.replace(old, new)
+    return text
+
+
+# Input files written once for all cases
+FILES = {
+    "good.toml": GOOD,
+    "other.toml": drifting_grains(n=4, end=1e-7),
+    "garbage.toml": "this is = = not [[[ toml\n",
+    "prep.toml": prep_scene(),
+    "shock.toml": SHOCK,
+    "negative.toml": _scene(a=("cell_size = 1.0e-3", "cell_size = -1.0e-3")),
+    "zero.toml": _scene(a=("axes = [4.0e-4, 3.0e-4]", "axes = [0.0, 3.0e-4]")),
+    "nan.toml": _scene(a=("end = 1e-07", "end = nan")),
+    "huge.toml": _scene(a=("box = [0.0, 0.0, 0.024, 0.006]", "box = [0.0, 0.0, 1.0e9, 0.006]")),
+    "effect.toml": GOOD + "\n[viscosityy]\ncoefficient = 1.0\n",
+    "fast.toml": GOOD + "\n[[blocks]]\nname = \"b\"\nbox = [0.0, 0.0, 0.024, 2.0e-4]\n"
+                        "material = \"grain\"\nvelocity = [0.0, 1.0e300]\n",
+    "prep-zero.toml": prep_scene().replace("grains = 8", "grains = 0"),
+    "one-cell.toml": _scene(a=("cell_size = 1.0e-3", "cell_size = 0.02")),
+    "strains.csv": "exx,eyy,exy,ezz\n-0.01,0,0,0\n",
+    "notafolder": "a plain file\n",
+    "keep-0000.vtu": "precious\n",
+    "keep.csv": "precious\n",
+    "keep.h5": "precious\n",
+    "side.xdmf": "precious\n",
+    "stale.h5.ckpt.h5": "precious\n",
+}
+
+
+@pytest.fixture(scope="module")
+def folder(tmp_path_factory):
+    """The input files, a run file with its checkpoint, a shock run with its summary."""
+    d = tmp_path_factory.mktemp("badin")
+    for name, text in FILES.items():
+        (d / name).write_text(text)
+    (d / "adir").mkdir()
+    for args in (["run", "good.toml", "-o", "good.h5"], ["run", "shock.toml", "-o", "sh.h5"]):
+        p = pdfem(args + ["--quiet"], d)
+        assert p.returncode == 0, p.stderr
+    for src, dst in (("good.h5", "trunc.h5"), ("good.h5.ckpt.h5", "trunc.ckpt.h5")):
+        data = (d / src).read_bytes()
+        (d / dst).write_bytes(data[: len(data) // 2])
+    return d
+
+
+# (command line, text the one error line must hold)
+CASES = {
+    # run
+    "run missing scene": (["run", "absent.toml"], "absent.toml"),
+    "run not TOML": (["run", "garbage.toml"], "garbage.toml: TOML syntax"),
+    "run HDF5 as scene": (["run", "good.h5"], "good.h5: cannot read the scene file"),
+    "run negative size": (["run", "negative.toml"], "domain.cell_size: must be >= 0"),
+    "run zero size": (["run", "zero.toml"], "grains[0].axes[0]: must be > 0"),
+    "run nan": (["run", "nan.toml"], "time.end: must be finite"),
+    "run huge": (["run", "huge.toml"], "domain.cell_size: the cell grid would have"),
+    "run faster than light": (["run", "fast.toml"], "blocks[0].velocity: must be below"),
+    "run unknown effect": (["run", "effect.toml"], "viscosityy: unknown table"),
+    "run no folder": (["run", "good.toml", "-o", "nowhere/r.h5"], "nowhere does not exist"),
+    "run parent is a file": (["run", "good.toml", "-o", "notafolder/r.h5"],
+                             "notafolder is not a folder"),
+    "run output is a folder": (["run", "good.toml", "-o", "adir", "--force"],
+                               "adir is a folder"),
+    "run existing output": (["run", "good.toml", "-o", "keep.h5"], "keep.h5 exists"),
+    "run existing sidecar": (["run", "good.toml", "-o", "side.h5"], "side.xdmf exists"),
+    "run existing checkpoint": (["run", "good.toml", "-o", "stale.h5"],
+                                "stale.h5.ckpt.h5 exists"),
+    "run restart missing": (["run", "good.toml", "-o", "r.h5", "--restart", "absent.ckpt.h5"],
+                            "absent.ckpt.h5"),
+    "run restart not HDF5": (["run", "good.toml", "-o", "r.h5", "--restart", "good.toml"],
+                             "cannot read good.toml"),
+    "run restart truncated": (["run", "good.toml", "-o", "r.h5", "--restart", "trunc.ckpt.h5"],
+                              "trunc.ckpt.h5"),
+    "run restart other scene": (["run", "other.toml", "-o", "r.h5", "--restart",
+                                 "good.h5.ckpt.h5"], "different scene ([grains] differs"),
+    "run restart run file": (["run", "good.toml", "-o", "r.h5", "--restart", "good.h5"],
+                             "good.h5 is not a pdfem checkpoint"),
+    # prepare
+    "prepare missing scene": (["prepare", "absent.toml"], "absent.toml"),
+    "prepare not TOML": (["prepare", "garbage.toml"], "garbage.toml: TOML syntax"),
+    "prepare no table": (["prepare", "good.toml"], "prepare: the scene has no [prepare]"),
+    "prepare zero grains": (["prepare", "prep-zero.toml"], "prepare.grains: must be >= 1"),
+    "prepare no folder": (["prepare", "prep.toml", "-o", "nowhere/b.h5"], "nowhere"),
+    "prepare existing output": (["prepare", "prep.toml", "-o", "keep.h5"], "keep.h5 exists"),
+    # material
+    "material HDF5 as scene": (["material", "good.h5", "--material", "hmx"], "good.h5"),
+    "material unknown": (["material", "prep.toml", "--material", "lead"], "materials.lead"),
+    "material nan strain": (["material", "prep.toml", "--material", "hmx", "--strain", "nan",
+                             "--out", "m.csv"], "--strain"),
+    "material binary path": (["material", "prep.toml", "--material", "hmx", "--path",
+                              "good.h5", "--out", "m.csv"], "--path: good.h5"),
+    "material no folder": (["material", "prep.toml", "--material", "hmx", "--out",
+                            "nowhere/m.csv"], "--out: "),
+    "material existing output": (["material", "prep.toml", "--material", "hmx", "--out",
+                                  "keep.csv"], "keep.csv exists"),
+    # export
+    "export missing": (["export", "absent.h5"], "absent.h5: no such run file"),
+    "export not HDF5": (["export", "good.toml"], "good.toml: cannot read"),
+    "export truncated": (["export", "trunc.h5"], "trunc.h5: cannot read"),
+    "export checkpoint": (["export", "good.h5.ckpt.h5"], "not a pdfem run file"),
+    "export unknown format": (["export", "good.h5", "--format", "bogus", "-p", "e"],
+                              "--format: meshio has no writer 'bogus'"),
+    "export no folder": (["export", "good.h5", "-p", "nowhere/e"], "nowhere does not exist"),
+    "export existing output": (["export", "good.h5", "-p", "keep"], "keep-0000.vtu exists"),
+    "export over its run file": (["export", "good.h5", "--format", "xdmf", "-p", "good",
+                                  "--force"], "good.h5 is the run file"),
+    # analyse
+    "analyse missing": (["analyse", "absent.h5"], "absent.h5: no such run file"),
+    "analyse truncated": (["analyse", "trunc.h5"], "trunc.h5: cannot read"),
+    "analyse not a shock run": (["analyse", "good.h5"], "good.h5: no [shock] table"),
+    "analyse existing output": (["analyse", "sh.h5"], "sh-summary.json exists"),
+    "analyse no folder": (["analyse", "sh.h5", "-p", "nowhere/a"], "nowhere does not exist"),
+    # bench
+    "bench zero": (["bench", "elements", "--n", "0"], "--n: must be in [1, "),
+    "bench huge": (["bench", "contact", "--sizes", "10,1000000000000"], "--sizes: must be in"),
+    "bench json no folder": (["bench", "parallel", "--json", "nowhere/b.json"], "--json: "),
+    # study
+    "study missing scene": (["study", "accuracy", "absent.toml"], "absent.toml"),
+    "study infinite scale": (["study", "accuracy", "--kn0-scale", "1,inf"], "--kn0-scale"),
+    "study negative level": (["study", "accuracy", "--levels", "-1"], "--levels"),
+    "study no folder": (["study", "accuracy", "shock.toml", "-p", "nowhere/s"], "nowhere"),
+    "study zero size": (["study", "convergence", "--sizes", "0,8"], "--sizes"),
+    # sweep
+    "sweep not TOML": (["sweep", "garbage.toml"], "garbage.toml: TOML syntax"),
+    "sweep nan speed": (["sweep", "shock.toml", "--velocities", "100,nan"], "--velocities"),
+    "sweep not a shock scene": (["sweep", "good.toml"], "good.toml: shock"),
+    "sweep no folder": (["sweep", "shock.toml", "-p", "nowhere/s"], "nowhere does not exist"),
+}
+
+
+def _state(folder):
+    """Every file under folder with a digest of its content."""
+    out = {}
+    for root, _, names in os.walk(folder):
+        for n in names:
+            p = os.path.join(root, n)
+            with open(p, "rb") as f:
+                out[os.path.relpath(p, folder)] = hashlib.sha1(f.read()).hexdigest()
+    return out
+
+
+def _one_error_line(p, text):
+    assert p.returncode == 2, (p.returncode, p.stdout, p.stderr)
+    assert "Traceback" not in p.stderr + p.stdout, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("pdfem: error: "), p.stderr
+    assert text in lines[0], (text, lines[0])
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_bad_input_one_line_exit_2_nothing_written(folder, case):
+    args, text = CASES[case]
+    before = _state(folder)
+    p = pdfem(args, folder, timeout=60)
+    _one_error_line(p, text)
+    assert _state(folder) == before
+
+
+def test_more_ranks_than_cells(folder):
+    before = _state(folder)
+    p = pdfem(["run", "one-cell.toml", "-o", "r.h5", "--quiet"], folder, ranks=2, timeout=60)
+    _one_error_line(p, "one-cell.toml: domain.cell_size: the cell grid has 1 cell(s)")
+    assert _state(folder) == before
+
+
+def test_a_rank_without_grains_writes_its_share(tmp_path):
+    """Two cells on two ranks, both grains in one: the rank with no bodies still takes part in
+    the collective writes, and the file is the 1-rank one."""
+    text = drifting_grains(n=2, end=1e-7, frac=0.25).replace("cell_size = 1.0e-3",
+                                                             "cell_size = 0.012")
+    (tmp_path / "e.toml").write_text(text)
+    for n in (1, 2):
+        p = pdfem(["run", "e.toml", "-o", f"e{n}.h5", "--quiet"], tmp_path, ranks=n)
+        assert p.returncode == 0, p.stderr
+    a, b = datasets(tmp_path / "e1.h5"), datasets(tmp_path / "e2.h5")
+    assert sorted(a) == sorted(b) and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def test_material_command_knows_the_named_paths():
+    """The command line lists the named strain paths without loading the material kernels."""
+    from pdfem import material_point
+    from pdfem.cli.material import NAMED_PATHS
+
+    assert NAMED_PATHS == material_point.NAMED_PATHS

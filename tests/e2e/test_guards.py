@@ -1,0 +1,125 @@
+"""Guards through the command line: a failed check stops every rank with exit status 3, names
+the step, time, ids and check, writes the last good state; the remedies act and say so."""
+
+import h5py
+import numpy as np
+from mpi4py import MPI
+
+from pdfem.errors import SimulationError
+from pdfem.scene import parse_scene
+from pdfem.solver import Simulation
+from tests.e2e.test_cli import datasets, pdfem
+from tests.scenes import collision
+
+# A 200 m/s collision: energy error 4.8 % at time.safety 1.0, 0.9 % at 0.5, 0.2 % at 0.25
+FAST = collision(v=200.0, kn0=1e13, end=4e-6).replace("safety = 0.5", "safety = 1.0")
+
+
+def _scene(tmp_path, guards, name="s.toml", text=FAST):
+    (tmp_path / name).write_text(text + "\n[guards]\n" + guards)
+    return name
+
+
+def test_energy_drift_stops_all_ranks_and_keeps_the_last_good_state(tmp_path):
+    name = _scene(tmp_path, "energy_drift = 0.02\nsnapshot_steps = 50\n")
+    p = pdfem(["run", name, "-o", "r.h5", "--quiet"], tmp_path, ranks=2)
+    assert p.returncode == 3, p.stderr
+    line = [ln for ln in p.stderr.splitlines() if ln.startswith("pdfem: error")]
+    assert len(line) == 1 and "Traceback" not in p.stderr
+    msg = line[0]
+    assert "check energy drift" in msg and "step " in msg and "t=" in msg
+    assert "guards.energy_drift = 0.02" in msg and "r.h5.ckpt.h5" in msg
+    # No finished run file; the last good state and the run so far are kept for a restart
+    assert not (tmp_path / "r.h5").exists()
+    assert (tmp_path / "r.h5.part").exists()
+    with h5py.File(tmp_path / "r.h5.ckpt.h5") as f:
+        assert f.attrs["format"] >= 1
+    # Restart from it with the guard relaxed: the run completes, and its file is the one a
+    # run without the guard writes, bit for bit (the last good state is exact)
+    _scene(tmp_path, "energy_drift = 0.0\nsnapshot_steps = 50\n")
+    p = pdfem(["run", name, "-o", "r.h5", "--quiet", "--restart", "r.h5.ckpt.h5"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    _scene(tmp_path, "energy_drift = 0.0\n", name="ref.toml")
+    p = pdfem(["run", "ref.toml", "-o", "ref.h5", "--quiet"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    a, b = datasets(tmp_path / "r.h5"), datasets(tmp_path / "ref.h5")
+    assert sorted(a) == sorted(b)
+    for k in a:
+        assert np.array_equal(a[k], b[k]), k
+
+
+def test_time_step_remedy_acts_logs_and_completes(tmp_path):
+    name = _scene(tmp_path, "energy_drift = 0.02\nsnapshot_steps = 50\ndt_retries = 3\n")
+    p = pdfem(["run", name, "-o", "r.h5"], tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    acted = [ln for ln in p.stdout.splitlines() if ln.startswith("guard:")]
+    assert acted and "check energy drift" in acted[0] and "remedy 1 of 3" in acted[0]
+    assert "time.safety 1 -> 0.5" in acted[0]
+    with h5py.File(tmp_path / "r.h5") as f:
+        assert f["energy/balance_error"][...].max() <= 0.02
+
+
+def test_inverted_element_names_body_and_element(tmp_path):
+    # A single block crushed by its top nodes moving down faster than any wave
+    text = f"""
+[domain]
+box = [0.0, 0.0, 0.001, 0.001]
+[time]
+end = 1.0e-6
+[output]
+path = "r.h5"
+[materials.soft]
+model = "elastic"
+density = 1000.0
+bulk = 1.0e6
+shear = 1.0e6
+[[blocks]]
+name = "cube"
+box = [0.0, 0.0, 0.001, 0.001]
+nx = 1
+material = "soft"
+[[bc]]
+body = "cube"
+nodes = "bottom"
+type = "fixed"
+[[bc]]
+body = "cube"
+nodes = "top"
+type = "velocity"
+velocity = [0.0, {-1.0e4}]
+"""
+    (tmp_path / "c.toml").write_text(text)
+    p = pdfem(["run", "c.toml", "--quiet"], tmp_path)
+    assert p.returncode == 3, p.stderr
+    msg = p.stderr.strip().splitlines()[-1]
+    assert "check inverted element: element 0 of body 0" in msg and "step " in msg
+    assert (tmp_path / "r.h5.ckpt.h5").exists() and not (tmp_path / "r.h5").exists()
+
+
+def test_non_finite_value_is_caught(tmp_path):
+    sim = Simulation(parse_scene(collision(v=20.0), str(tmp_path)), MPI.COMM_SELF)
+    sim.step()
+    sim.store.v[7, 1] = np.nan
+    try:
+        sim.step()
+    except SimulationError as exc:
+        msg = str(exc)
+    else:
+        raise AssertionError("a NaN velocity went through a step")
+    assert "check non-finite: the force of node" in msg and "of body 0" in msg
+
+
+def test_contact_stiffness_cap_logs_and_allows_the_element_step(tmp_path):
+    stiff = collision(v=20.0, kn0=1e20, end=5e-7)
+    capped = stiff + "\n[guards]\ncap_contact = \"element\"\n"
+    (tmp_path / "a.toml").write_text(stiff)
+    (tmp_path / "b.toml").write_text(capped)
+    pa = pdfem(["run", "a.toml", "-o", "a.h5"], tmp_path)
+    pb = pdfem(["run", "b.toml", "-o", "b.h5"], tmp_path)
+    assert pa.returncode == 0 and pb.returncode == 0, (pa.stderr, pb.stderr)
+    assert "remedy cap_contact" not in pa.stdout
+    line = [ln for ln in pb.stdout.splitlines() if "remedy cap_contact" in ln]
+    assert len(line) == 1 and "kn0 1e+20 ->" in line[0]
+    steps = [int(p.stdout.split("done: ")[1].split()[0]) for p in (pa, pb)]
+    # kn0 = 1e20 limits the step 100-fold below the elements'; the cap gives it back
+    assert steps[1] * 20 < steps[0]

@@ -1,0 +1,26 @@
+"""The hard-case suite at CI size: ``mpirun -n 2 python -m pdfem study hard --size ci`` per
+case. Each must run to completion on 1 and on 2 ranks with the energy balance within 2 %,
+every frame finite, no integration-point Jacobian <= 0, and bit-identical run files."""
+
+import json
+
+import pytest
+
+from pdfem.study.hard import ENERGY_TOL
+from pdfem.study.hard_cases import CASES, LARGE_ONLY
+from tests.e2e.test_cli import pdfem
+
+CI_CASES = [c for c in CASES if c not in LARGE_ONLY]
+
+
+@pytest.mark.parametrize("case", CI_CASES)
+def test_hard_case(tmp_path, case):
+    p = pdfem(["study", "hard", "--size", "ci", "--case", case, "-p", "h"], tmp_path, ranks=2,
+              timeout=600)
+    assert p.returncode == 0, p.stderr
+    row = json.loads((tmp_path / "h.json").read_text())[0]
+    assert row["status"] == "ok", row["status"]
+    assert row["energy_error"] <= ENERGY_TOL, row
+    assert row["finite"] and row["jacobian_min"] > 0, row
+    assert row["identical"], row
+    assert row["passed"]

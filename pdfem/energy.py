@@ -8,20 +8,19 @@ the stored energy at t = 0. (The stored-energy function sigma:C^-1:sigma/2 x vol
 hypoelastic update is not the integral of that work once volumes change by a few per cent:
 at 1000 m/s it was 20 % short in the compressed grains.) Balance:
     E = K + U_strain + U_contact + V_gravity + D_damping + D_plastic + D_friction
-        + L_contact + D_viscous - W_bc
+        + D_contact_damping + L_contact + D_viscous - W_bc
         + (E_thermal - Q_sources - Q_bc) + W_thermal_strain
 stays equal to its initial value. L_contact is what the contacts absorbed beyond their stored
-energy U_contact and friction D_friction: minus the work their nodal forces did on the bodies
-(accumulated by the integrator exactly as it moves the nodes) less their growth since t = 0.
-It holds the
-normal damping's dissipation and the hysteresis of the overlap law (its force is not the
-gradient of its stored energy when the contact width changes); D_viscous is the work of the
-bulk viscosity. The error is |E - E0| over the largest term now or at
-t = 0. With [heat], E_thermal = sum C (T - T_initial) grows by what the sources
-(dissipation, friction, thermo-elastic coupling) and the held nodes put in, so the bracket
-checks that the heat update
-conserves energy while the dissipated terms stay counted once; W_thermal_strain is the work
-of the stress on the thermal strain (thermal expansion). Without [heat] they are zero.
+energy U_contact, friction D_friction and normal damping D_contact_damping: minus the work their
+nodal forces did on the bodies (accumulated by the integrator exactly as it moves the nodes)
+less the growth of those three since t = 0. It is the hysteresis of the overlap law (its force
+is not the gradient of its stored energy when the contact width changes), reported, not part of
+the error; D_viscous is the work of the bulk viscosity. The error is |E - E0| over the largest
+term now or at t = 0 (never below energy_floor). With [heat], E_thermal = sum C (T - T_initial)
+grows by what the sources (dissipation, friction, thermo-elastic coupling) and the held nodes
+put in, so the bracket checks that the heat update conserves energy while the dissipated terms
+stay counted once; W_thermal_strain is the work of the stress on the thermal strain (thermal
+expansion). Without [heat] they are zero.
 """
 
 import math

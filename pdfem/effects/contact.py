@@ -31,13 +31,10 @@ from pdfem.kernels.contact import (
     R_DISS,
     R_ENERGY,
     R_WIDTH,
-    accumulate_sorted,
-    contact_dt_min,
     element_pair_forces,
     element_wall_forces,
-    entry_dt_min,
-    max_speed,
 )
+from pdfem.kernels.contact_step import accumulate_sorted, contact_dt_min, entry_dt_min, max_speed
 from pdfem.kernels.heat import accumulate_heat_sorted, contact_heat
 from pdfem.kernels.integrate import ACC_CDAMP, ACC_CWORK, ACC_FRIC
 from pdfem.kernels.neighbours import (

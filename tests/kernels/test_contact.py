@@ -5,6 +5,7 @@ import pytest
 
 from pdfem.kernels import contact as C
 from pdfem.kernels import contact_law as L
+from pdfem.kernels import contact_step as CS
 from pdfem.kernels import overlap as O
 
 SQ = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
@@ -98,7 +99,7 @@ def run_pairs(x, du, conn, ebnd, egid, eloc, pairs, params, us, m=None, dt=0.0):
 def nodal_forces(out, nn):
     act, nodes, w, fa = out[:4]
     f = np.zeros((nn, 2))
-    C.accumulate_sorted(np.arange(len(act), dtype=np.int64), act, nodes, w, fa, nn, f)
+    CS.accumulate_sorted(np.arange(len(act), dtype=np.int64), act, nodes, w, fa, nn, f)
     return f
 
 
@@ -461,7 +462,7 @@ def test_accumulate_order_and_ghosts():
     order = rng.permutation(50).astype(np.int64)
     n_owned = len(x) // 2
     f = np.zeros_like(x)
-    C.accumulate_sorted(order, act, nodes, w, fa, n_owned, f)
+    CS.accumulate_sorted(order, act, nodes, w, fa, n_owned, f)
     ref = np.zeros_like(x)
     for p in order:
         if act[p] == C.C_ACTIVE:
@@ -472,7 +473,7 @@ def test_accumulate_order_and_ghosts():
     # Stable step over the contacts
     m = rng.uniform(1.0, 2.0, len(x))
     res = out[5]
-    dt = C.contact_dt_min(act, nodes, res, m, x, 0.0)
+    dt = CS.contact_dt_min(act, nodes, res, m, x, 0.0)
     # Reference: stiffness scaled from the overlap width to the longest contact edge
     ref = np.inf
     for p in np.nonzero(act == C.C_ACTIVE)[0]:
@@ -484,7 +485,7 @@ def test_accumulate_order_and_ghosts():
         meff = ma if not np.isfinite(mb) else ma * mb / (ma + mb)
         ref = min(ref, 0.5 * 2.0 * np.sqrt(meff / k))
     assert np.isfinite(ref) and dt == pytest.approx(ref, rel=1e-12)
-    assert C.max_speed(np.array([[3.0, 4.0], [0.0, 1.0]]), 0, 2) == 5.0
+    assert CS.max_speed(np.array([[3.0, 4.0], [0.0, 1.0]]), 0, 2) == 5.0
 
 
 # ---- candidate finders ----

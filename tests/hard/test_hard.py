@@ -24,3 +24,14 @@ def test_hard_case(tmp_path, case):
     assert row["finite"] and row["jacobian_min"] > 0, row
     assert row["identical"], row
     assert row["passed"]
+
+
+def test_study_hard_bad_input(tmp_path):
+    # One rank cannot compare 1 with N ranks; an unknown case; a large-only case at CI size
+    p = pdfem(["study", "hard", "--size", "ci"], tmp_path)
+    assert p.returncode == 2 and "under mpirun with 2 or more ranks" in p.stderr
+    for case in ("bogus", "settle-1e6"):
+        p = pdfem(["study", "hard", "--size", "ci", "--case", case], tmp_path, ranks=2)
+        lines = p.stderr.strip().splitlines()
+        assert p.returncode == 2 and len(lines) == 1 and f"--case: {case!r}" in lines[0], p.stderr
+    assert not list(tmp_path.iterdir())

@@ -77,8 +77,6 @@ class Guards:
         sim.stop_requested = False
         for eff in sim.effects:
             eff.after_rebuild(sim)
-            if hasattr(eff, "_last"):
-                eff._last = None
         return dict(snap.driver)
 
     def can_retry(self):

@@ -21,12 +21,13 @@ from pdfem.effects.contact import check_contact_scene
 from pdfem.energy import energy_floor, initial_strain_work
 from pdfem.errors import InputError, SimulationError
 from pdfem.guards import Guards, contact_stiffness_cap
-from pdfem.kernels.checks import corner_jacobians, first_nonfinite
+from pdfem.kernels.checks import first_nonfinite
 from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
 from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
+from pdfem.mesh.quality import corner_jacobians
 from pdfem.parallel.exchange import owned_grain_cells, rebuild
 from pdfem.store import Batch, Store, core_fields
 from pdfem.timers import Timers
@@ -293,10 +294,9 @@ class Simulation:
     def _element_failure(self, e):
         """Words for an element the kernel stopped at: which check failed."""
         s = self.store
-        jac = np.empty(4)
-        jmin = corner_jacobians(s.x, s.conn, e, jac)
+        jac = corner_jacobians(s.x, s.conn[e : e + 1])[0]
         what = (f"is inverted (corner Jacobians {', '.join(f'{j:.3g}' for j in jac)} m^2)"
-                if jmin <= 0.0 else "is inverted at an integration point or its material "
+                if jac.min() <= 0.0 else "is inverted at an integration point or its material "
                 "update failed")
         return f"check inverted element: element {s.elem_loc[e]} of body {s.elem_gid[e]} {what}"
 

@@ -200,3 +200,18 @@ def test_quality_distorted_quad():
     # Non-convex (dart) quad: one negative corner
     dart = np.array([[0.0, 0.0], [2.0, 1.0], [0.0, 2.0], [1.0, 1.0]])
     assert jacobian_ratio(dart, conn)[0] < 0.0
+
+
+def test_point_jacobians_corners_and_parallelogram():
+    from pdfem.mesh.quality import corner_jacobians, point_jacobians
+
+    # A skewed, tapered quad: at the corners the same as corner_jacobians
+    xy = np.array([[0.0, 0.0], [2.0, 0.1], [2.5, 1.4], [0.2, 1.0]])
+    conn = np.array([[0, 1, 2, 3]])
+    corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+    assert np.allclose(point_jacobians(xy, conn, corners), corner_jacobians(xy, conn),
+                       rtol=1e-14)
+    # A parallelogram: constant, a quarter of its area, at any point
+    par = np.array([[0.0, 0.0], [2.0, 0.0], [2.5, 1.0], [0.5, 1.0]])
+    j = point_jacobians(par, conn, [(0.0, 0.0), (0.3, -0.7), (0.577, 0.577)])
+    assert np.allclose(j, 2.0 / 4.0, rtol=1e-14)

@@ -32,6 +32,27 @@ def corner_jacobians(xy, conn):
     return 0.25 * (fwd[..., 0] * bwd[..., 1] - fwd[..., 1] * bwd[..., 0])
 
 
+def point_jacobians(xy, conn, points):
+    """Jacobian determinant of the bilinear map of every quad at natural points
+    ``[(xi, eta), ...]`` of the reference square [-1, 1]^2; shape (ne, len(points)).
+
+    At the corners this is :func:`corner_jacobians`; at the integration points it is what an
+    element kernel checks (the 1-point rule: (0, 0); 2 x 2: (+-1/sqrt3, +-1/sqrt3)).
+    """
+    p = np.asarray(xy, dtype=np.float64)[np.asarray(conn)]
+    xi_n = np.array([-1.0, 1.0, 1.0, -1.0])
+    eta_n = np.array([-1.0, -1.0, 1.0, 1.0])
+    out = []
+    # Derivatives of the shape functions at each point, then the 2 x 2 determinant
+    for xi, eta in points:
+        dxi = 0.25 * xi_n * (1.0 + eta * eta_n)
+        deta = 0.25 * eta_n * (1.0 + xi * xi_n)
+        xx, xy_ = p[:, :, 0] @ dxi, p[:, :, 0] @ deta
+        yx, yy = p[:, :, 1] @ dxi, p[:, :, 1] @ deta
+        out.append(xx * yy - xy_ * yx)
+    return np.stack(out, axis=1)
+
+
 def jacobian_ratio(xy, conn):
     """Ratio min/max of the corner Jacobian determinants of every quad; shape (ne,).
 

@@ -31,29 +31,17 @@ import numpy as np
 from mpi4py import MPI
 
 from pdfem.errors import SimulationError
+from pdfem.mesh.quality import corner_jacobians, point_jacobians
 from pdfem.study.hard_cases import CASES
 
 # Largest energy-balance error a hard case may show
 ENERGY_TOL = 0.02
 
 
-# Natural coordinates of the nodes (counter-clockwise) and of the 2x2 Gauss points
-XI = np.array([-1.0, 1.0, 1.0, -1.0])
-ETA = np.array([-1.0, -1.0, 1.0, 1.0])
+# The integration points of the two rules in natural coordinates
 GP = 1.0 / math.sqrt(3.0)
-
-
-def jacobians(p, points):
-    """Jacobian determinants of quads p (ne, 4, 2) at natural points [(xi, eta), ...]:
-    (ne, len(points))."""
-    out = []
-    for xi, eta in points:
-        dxi = 0.25 * XI * (1.0 + eta * ETA)
-        deta = 0.25 * ETA * (1.0 + xi * XI)
-        xx, xy = p[:, :, 0] @ dxi, p[:, :, 0] @ deta
-        yx, yy = p[:, :, 1] @ dxi, p[:, :, 1] @ deta
-        out.append(xx * yy - xy * yx)
-    return np.stack(out, axis=1)
+RULE_POINTS = {"1pt": [(0.0, 0.0)],
+               "2x2": [(-GP, -GP), (GP, -GP), (GP, GP), (-GP, GP)]}
 
 
 def frame_checks(path):
@@ -69,14 +57,11 @@ def frame_checks(path):
         x = f["frames/x"][...]
         err = float(np.max(f["energy/balance_error"][...]))
         rule = tomllib.loads(f.attrs["scene"]).get("element", {}).get("rule", "1pt")
-    ips = [(0.0, 0.0)] if rule == "1pt" else [(GP * a, GP * b) for a, b in zip(XI, ETA,
-                                                                             strict=True)]
     jmin = cmin = math.inf
     ratio = math.nan
     for k in range(x.shape[0]):
-        p = x[k][conn]
-        jmin = min(jmin, float(jacobians(p, ips).min()))
-        corner = jacobians(p, list(zip(XI, ETA, strict=True)))
+        jmin = min(jmin, float(point_jacobians(x[k], conn, RULE_POINTS[rule]).min()))
+        corner = corner_jacobians(x[k], conn)
         cmin = min(cmin, float(corner.min()))
         if k == x.shape[0] - 1 and corner.min() > 0:
             ratio = float((corner.max(axis=1) / corner.min(axis=1)).max())

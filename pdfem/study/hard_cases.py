@@ -15,6 +15,7 @@ from importlib import resources
 import numpy as np
 
 from pdfem.mesh.ellipse import ellipse_mesh, place
+from pdfem.mesh.quality import jacobian_ratio
 from pdfem.prepare.bedfile import write_bed
 
 # The elastic grain of the non-shock cases (HMX-like moduli)
@@ -113,16 +114,10 @@ def aspect_4(folder, size):
                     end, kn0=1.0e14)
 
 
-def jacobian_ratio(xy, conn):
+def worst_ratio(xy, conn):
     """Largest over the elements of (largest / smallest corner Jacobian); inf if one <= 0."""
-    worst = 1.0
-    for q in conn:
-        p = xy[q]
-        j = [np.cross(p[(k + 1) % 4] - p[k], p[(k + 3) % 4] - p[k]) for k in range(4)]
-        if min(j) <= 0.0:
-            return math.inf
-        worst = max(worst, max(j) / min(j))
-    return worst
+    r = jacobian_ratio(xy, conn).min()
+    return 1.0 / r if r > 0.0 else math.inf
 
 
 def sheared_mesh(a, b, level, ratio=SHEAR_RATIO):
@@ -137,7 +132,7 @@ def sheared_mesh(a, b, level, ratio=SHEAR_RATIO):
         s = 0.5 * (lo + hi)
         test = xy.copy()
         test[inner, 0] += s * (1.0 - r2) * a
-        if jacobian_ratio(test, conn) < ratio:
+        if worst_ratio(test, conn) < ratio:
             lo = s
         else:
             hi = s

@@ -56,15 +56,24 @@ def boundary_flags(conn):
     return (cnt[inv.ravel()] == 1).reshape(conn.shape).astype(np.int8)
 
 
+def contact_lengths(x, conn, ebnd):
+    """(ne,) each element's contact length L: its longest boundary edge (0 when it has none)."""
+    edge = np.linalg.norm(x[np.roll(conn, -1, axis=1)] - x[conn], axis=2)
+    return np.where(ebnd != 0, edge, 0.0).max(axis=1)
+
+
 def _batch(fields, nip, nst, gid, nn, ne, isglobal, x, v, lconn, emat, ebnd):
-    """A batch with zero stress and state and free nodes."""
+    """A batch with zero stress and state and free nodes; the contact lengths of the elements
+    as built (x, undeformed)."""
     nb, nnode, nelem = gid.shape[0], x.shape[0], lconn.shape[0]
+    first = np.repeat(np.cumsum(nn) - nn, ne).astype(np.int64)
     arrays = {
         "gid": gid.astype(np.int64), "nn": nn.astype(np.int64), "ne": ne.astype(np.int64),
         "isglobal": np.full(nb, isglobal, np.int8), "acc": np.zeros((nb, NACC)),
         "x": x, "v": v, "m": np.zeros(nnode), "bcf": np.zeros((nnode, 2), np.int8),
         "bcv": np.zeros((nnode, 2)), "lconn": lconn.astype(np.int64),
         "emat": emat.astype(np.int32), "ebnd": ebnd.astype(np.int8),
+        "elen": contact_lengths(x, lconn + first[:, None], ebnd),
         "sig": np.zeros((nelem, nip, 4)), "mst": np.zeros((nelem, nip, nst)),
         "hgq": np.zeros((nelem, 2)), "ewint": np.zeros(nelem), "ewp": np.zeros(nelem),
         "hkey": np.zeros((0, 4), np.int64), "hval": np.zeros(0),

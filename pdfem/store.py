@@ -42,6 +42,7 @@ def core_fields(nip, nst, nacc):
         Field("lconn", ELEM, (4,), np.int64),
         Field("emat", ELEM, (), np.int32),
         Field("ebnd", ELEM, (4,), np.int8),
+        Field("elen", ELEM, (), np.float64),
         Field("sig", ELEM, (nip, 4), np.float64),
         Field("mst", ELEM, (nip, nst), np.float64),
         Field("hgq", ELEM, (2,), np.float64),

@@ -72,23 +72,31 @@ def test_contact_damping_takes_energy_out_and_the_balance_closes(tmp_path):
     e0, err0, damp0, loss0 = _collide(tmp_path, 0.0)
     e1, err1, damp1, loss1 = _collide(tmp_path, 0.5)
     e2, err2, damp2, loss2 = _collide(tmp_path, 1.0)
-    # Undamped: elastic rebound, nothing damped, the overlap law absorbs (almost) nothing
-    assert e0 == pytest.approx(1.0, abs=0.02) and damp0 == 0.0 and abs(loss0) < 0.01
-    # Damped: a slower rebound; the damping's dissipation is what the grains lost
+    # Undamped: elastic rebound, nothing damped, the contacts conserve energy (measured:
+    # rebound 0.997, contact_loss 0)
+    assert e0 == pytest.approx(1.0, abs=0.01) and damp0 == 0.0 and abs(loss0) < 5e-4
+    # Damped: a slower rebound (0.952, 0.912); the damping's dissipation is what the grains lost
+    # and the balance, which includes whatever the contacts do, closes (measured: contact_loss
+    # 3e-5 and 9e-5 of the impact energy, balance errors 2e-5 to 7e-5)
     assert e2 < e1 < 0.97 * e0
     assert damp1 > 0.05 and damp2 > damp1
-    assert max(abs(loss1), abs(loss2)) < 0.02
-    assert max(err0, err1, err2) < 2e-3
+    assert max(abs(loss1), abs(loss2)) < 5e-4
+    assert max(err0, err1, err2) < 5e-4
 
 
-def test_damped_normal_and_its_time_step():
-    # Closing at 2 m/s adds c v to the compression, c = 2 zeta sqrt(m k)
-    c = 2 * 0.3 * np.sqrt(2.0 * 5.0)
-    assert L.damped_normal(-1.0, 5.0, -2.0, 2.0, 0.3) == pytest.approx(-1.0 - 2.0 * c)
+def test_damped_traction_and_its_time_step():
+    # A flat contact of width gn = L = 0.5: the spring in the gap h is kt gn^2 / L, its critical
+    # damping 2 sqrt(m k); on the area (dA = gn dh) that is c_A = c / gn^2
+    kt, m, length, gn, zeta = 5.0, 2.0, 0.5, 0.5, 0.3
+    c = 2 * zeta * np.sqrt(m * kt * gn**2 / length)
+    # Closing at 2 m/s (area growing at gn x 2) adds c x 2 / gn to the traction
+    assert L.damped_traction(1.0, kt, 2.0 * gn, m, length, gn, zeta) == pytest.approx(
+        1.0 + c * 2.0 / gn)
     # Separating: less compression, never tension
-    assert L.damped_normal(-1.0, 5.0, 0.1, 2.0, 0.3) == pytest.approx(-1.0 + 0.1 * c)
-    assert L.damped_normal(-1.0, 5.0, 10.0, 2.0, 0.3) == 0.0
-    assert L.damped_normal(-1.0, 5.0, -2.0, 2.0, 0.0) == -1.0
+    assert L.damped_traction(1.0, kt, -0.1 * gn, m, length, gn, zeta) == pytest.approx(
+        1.0 - c * 0.1 / gn)
+    assert L.damped_traction(1.0, kt, -10.0 * gn, m, length, gn, zeta) == 0.0
+    assert L.damped_traction(1.0, kt, 2.0, m, length, gn, 0.0) == 1.0
     # The dashpot shortens the stable step by sqrt(1 + zeta^2) - zeta
     r = L.contact_dt(2.0, np.inf, 8.0, 0.5) / L.contact_dt(2.0, np.inf, 8.0)
     assert r == pytest.approx(np.sqrt(1.25) - 0.5, rel=1e-14)
@@ -138,7 +146,7 @@ def test_grain_at_rest_on_the_floor_carries_its_weight(tmp_path):
     last = _contact(sim)._last
     on = last["active"] == C_ACTIVE
     assert on.any()
-    assert last["fa"][on, 1].sum() == pytest.approx(weight, rel=0.005)
+    assert last["fnod"][on, :4, 1].sum() == pytest.approx(weight, rel=0.005)
 
 
 def _incline(theta, mu, g=1.0e4, end=4.0e-4):
@@ -214,9 +222,9 @@ def test_no_contact_missed_on_a_dense_bed(tmp_path):
     m = pairs.shape[0]
     act = np.empty(m, np.int8)
     res = np.empty((m, NRES))
-    element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, pairs,
+    element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, s.elen, pairs,
                         np.tile([1e13, 2e-5, 5e12, 0.3, 0.95, 0.0], (m, 1)), np.zeros(m), act,
-                        np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty((m, 2)),
+                        np.empty((m, 8), np.int64), np.empty((m, 8)), np.empty((m, 8, 2)),
                         np.empty(m), res, s.m, 0.0)
     brute = {(s.elem_gid[a], s.elem_loc[a], s.elem_gid[b], s.elem_loc[b])
              for (a, b), x in zip(pairs, act, strict=True) if x == C_ACTIVE}
@@ -225,11 +233,11 @@ def test_no_contact_missed_on_a_dense_bed(tmp_path):
     cand = np.nonzero(s.ebnd.any(axis=1))[0]
     nw = cand.shape[0]
     wact = np.empty(nw, np.int8)
-    element_wall_forces(s.x, sim.du, s.conn, s.ebnd, cand, np.zeros((nw, 2)),
+    element_wall_forces(s.x, sim.du, s.conn, s.ebnd, s.elen, cand, np.zeros((nw, 2)),
                         np.tile([0.0, 1.0], (nw, 1)),
                         np.tile([1e13, 2e-5, 5e12, 0.3, 0.95, 0.0], (nw, 1)), np.zeros(nw),
-                        wact, np.empty((nw, 4), np.int64), np.empty((nw, 4)),
-                        np.empty((nw, 2)), np.empty(nw), np.empty((nw, NRES)), s.m, 0.0)
+                        wact, np.empty((nw, 8), np.int64), np.empty((nw, 8)),
+                        np.empty((nw, 8, 2)), np.empty(nw), np.empty((nw, NRES)), s.m, 0.0)
     floor = {(s.elem_gid[e], s.elem_loc[e]) for e, x in zip(cand, wact, strict=True)
              if x == C_ACTIVE}
     found_floor = {(k[0], k[1]) for k, a in zip(eff._last["keys"], eff._last["active"],

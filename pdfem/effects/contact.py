@@ -25,6 +25,7 @@ from pdfem.errors import InputError
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact import (
     C_ACTIVE,
+    NNOD,
     NRES,
     R_DAMP,
     R_DELTA,
@@ -215,29 +216,30 @@ class Contact(Effect):
         for w, (_, _, mu) in enumerate(self.walls):
             params[npair:][wids == w, L.P_MU] = mu
         active = np.empty(n, np.int8)
-        nodes = np.empty((n, 4), np.int64)
-        weights = np.empty((n, 4))
-        fa = np.empty((n, 2))
+        nodes = np.empty((n, NNOD), np.int64)
+        weights = np.empty((n, NNOD))
+        fnod = np.empty((n, NNOD, 2))
         us_out = np.empty(n)
         res = np.empty((n, NRES))
         sl = slice(0, npair)
         dt = getattr(sim, "dt", 0.0)
-        bad = element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, pairs,
-                                  params[sl], us_in[sl], active[sl], nodes[sl], weights[sl],
-                                  fa[sl], us_out[sl], res[sl], s.m, dt)
+        bad = element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, s.elen,
+                                  pairs, params[sl], us_in[sl], active[sl], nodes[sl],
+                                  weights[sl], fnod[sl], us_out[sl], res[sl], s.m, dt)
         sl = slice(npair, n)
         if nwall:
             p0, nrm = self._wall_p0[wids], self._wall_n[wids]
-            bad += element_wall_forces(s.x, sim.du, s.conn, s.ebnd, welems, p0, nrm, params[sl],
-                                       us_in[sl], active[sl], nodes[sl], weights[sl], fa[sl],
-                                       us_out[sl], res[sl], s.m, dt)
+            bad += element_wall_forces(s.x, sim.du, s.conn, s.ebnd, s.elen, welems, p0, nrm,
+                                       params[sl], us_in[sl], active[sl], nodes[sl],
+                                       weights[sl], fnod[sl], us_out[sl], res[sl], s.m, dt)
         self._check(sim, keys, active, res, bad)
-        self._apply(sim, keys, order, active, nodes, weights, fa, res, pairs)
+        self._apply(sim, keys, order, active, nodes, weights, fnod, res, pairs)
         self._bookkeeping(sim, keys, order, active, us_out, res, pairs, welems)
-        self._last = {"active": active, "nodes": nodes, "res": res, "fa": fa, "keys": keys}
+        self._last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys}
 
     def _check(self, sim, keys, active, res, bad):
-        """Guards: a degenerate overlap, or an overlap deeper than delta_max."""
+        """Guards: a degenerate overlap, or a mean overlap delta = area / L (the law's) beyond
+        delta_max."""
         deep = (active == C_ACTIVE) & (res[:, R_DELTA] > self.delta_max)
         if bad or deep.any():
             p = int(np.nonzero((active < 0) | deep)[0][0])
@@ -248,7 +250,7 @@ class Contact(Effect):
             sim.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
                      f"and {other} is {what}")
 
-    def _apply(self, sim, keys, order, active, nodes, weights, fa, res, pairs):
+    def _apply(self, sim, keys, order, active, nodes, weights, fnod, res, pairs):
         """Add forces (and contact heat) to owned nodes in key order (order sorts keys);
         block-side rows are gathered from all ranks."""
         s = sim.store
@@ -261,7 +263,7 @@ class Contact(Effect):
                          sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1])
         # No blocks: every contact is local, already sorted
         if sim.nglobal == 0:
-            self._add(sim, order, active, nodes, weights, fa, q)
+            self._add(sim, order, active, nodes, weights, fnod, q)
             return
         npair = pairs.shape[0]
         isg = s.isglobal[s.elem_body]
@@ -269,28 +271,31 @@ class Contact(Effect):
         mixed[:npair] = isg[pairs[:, 0]] != isg[pairs[:, 1]]
         local_nodes = nodes.copy()
         # Canonical orientation puts the grain (lower gid) first: its block side is gathered
-        local_nodes[mixed, 2:] = -1
+        local_nodes[mixed, NNOD // 2:] = -1
         sel = np.nonzero(mixed & (active == C_ACTIVE))[0]
         # Gathered rows carry the two heat columns either way (zero without heat)
         qsel = q[sel] if heat else np.zeros((sel.shape[0], 2))
-        rows = np.concatenate([keys[sel], nodes[sel], weights[sel], fa[sel], qsel], axis=1)
-        rows[:, 4:6] = -1
+        rows = np.concatenate([keys[sel], nodes[sel], weights[sel],
+                               fnod[sel].reshape(-1, 2 * NNOD), qsel], axis=1)
+        # Columns: keys 0:4, nodes 4:12 (the grain side's cleared), weights, forces, heat
+        rows[:, 4:4 + NNOD // 2] = -1
         got = allgather_rows(sim.comm, rows) if sim.comm.size > 1 else rows
         if got.shape[0] == 0:
-            self._add(sim, order, active, local_nodes, weights, fa, q)
+            self._add(sim, order, active, local_nodes, weights, fnod, q)
             return
+        c_w, c_f, c_q = 4 + NNOD, 4 + 2 * NNOD, 4 + 4 * NNOD
         k_all = np.concatenate([keys, got[:, 0:4].astype(np.int64)])
-        n_all = np.concatenate([local_nodes, got[:, 4:8].astype(np.int64)])
-        w_all = np.concatenate([weights, got[:, 8:12]])
-        f_all = np.concatenate([fa, got[:, 12:14]])
+        n_all = np.concatenate([local_nodes, got[:, 4:c_w].astype(np.int64)])
+        w_all = np.concatenate([weights, got[:, c_w:c_f]])
+        f_all = np.concatenate([fnod, got[:, c_f:c_q].reshape(-1, NNOD, 2)])
         a_all = np.concatenate([active, np.full(got.shape[0], C_ACTIVE, np.int8)])
-        q_all = np.concatenate([q, got[:, 14:16]]) if heat else None
+        q_all = np.concatenate([q, got[:, c_q:c_q + 2]]) if heat else None
         self._add(sim, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all)
 
-    def _add(self, sim, order, active, nodes, weights, fa, q):
+    def _add(self, sim, order, active, nodes, weights, fnod, q):
         """Forces (and heat, q not None) of the contacts in the given order to owned nodes."""
         s = sim.store
-        accumulate_sorted(order, active, nodes, weights, fa, s.nn_own, sim.fc)
+        accumulate_sorted(order, active, nodes, fnod, s.nn_own, sim.fc)
         if q is not None:
             accumulate_heat_sorted(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own,
                                    sim.heat.src)
@@ -320,13 +325,12 @@ class Contact(Effect):
         s = sim.store
         vmax = max_speed(s.v, 0, s.nn_own)
         dt = APPROACH * self.delta_min / (2.0 * vmax) if vmax > 0.0 else np.inf
-        dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.m, 0, s.ne_own, self.kn0_max,
+        dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.elen, s.m, 0, s.ne_own, self.kn0_max,
                                   self.zeta_max))
         if self._last is None:
             return dt
         last = self._last
-        return min(dt, contact_dt_min(last["active"], last["nodes"], last["res"], s.m, s.x,
-                                      self.zeta_max))
+        return min(dt, contact_dt_min(last["active"], last["res"], self.zeta_max))
 
     def dt_limiter(self, sim, dt):
         """Words naming what limits the step to dt (for the time.dt_min error): the contact
@@ -336,14 +340,13 @@ class Contact(Effect):
             last = self._last
             for p in np.nonzero(last["active"] == C_ACTIVE)[0]:
                 sl = slice(p, p + 1)
-                if contact_dt_min(last["active"][sl], last["nodes"][sl], last["res"][sl], s.m,
-                                  s.x, self.zeta_max) <= dt:
+                if contact_dt_min(last["active"][sl], last["res"][sl], self.zeta_max) <= dt:
                     k = last["keys"][p]
                     other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
                     return (f"the stiffness of the contact between body {k[0]} element {k[1]} "
                             f"and {other}")
         for e in range(s.ne_own):
-            if entry_dt_min(s.x, s.conn, s.ebnd, s.m, e, e + 1, self.kn0_max,
+            if entry_dt_min(s.x, s.conn, s.ebnd, s.elen, s.m, e, e + 1, self.kn0_max,
                             self.zeta_max) <= dt:
                 return (f"contact.kn0 on the edges of body {s.elem_gid[e]} element "
                         f"{s.elem_loc[e]}")

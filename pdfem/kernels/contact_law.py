@@ -1,7 +1,7 @@
 """Contact constitutive law (report sec. 5, fig. 6), per unit thickness (plane strain).
 
 Normal: no tension; in compression a hardening law on the mean normal overlap
-delta = overlap area / contact width w:
+delta = overlap area / L (L a length fixed for the contact, see contact.py):
 
     t_n(delta) = kn0 delta / (1 - delta/delta_max)        (traction magnitude, Pa)
 
@@ -16,11 +16,10 @@ tangential relative displacement; F_s = ks w u_s with |F_s| <= mu |F_n|; on slip
 limit and the slip times |F_s| is dissipated.
 
 Normal damping (an addition to the report's law, off unless contact.damping > 0): a dashpot
-in parallel with the normal spring, F_n <- min(F_n + c v_sep, 0) with v_sep the separation
-speed and c = 2 zeta sqrt(m_eff k) (zeta = 1: critical damping of the contact spring of
-current tangent stiffness k between the masses of the two sides). It stops the light boundary
-nodes of a grain bouncing off a hammer at twice its speed, which folds the grain's outer
-elements at km/s impacts. Its work is part of the contacts' absorbed energy (energy.py).
+in parallel with the normal spring, acting on the rate of the overlap area (damped_traction;
+zeta = 1: critical damping of the contact spring between the masses of the two sides). It
+stops the light boundary nodes of a grain bouncing off a hammer at twice its speed, which
+folds the grain's outer elements at km/s impacts. Its work is the energy term contact_damping.
 
 Sign: tension positive, so the normal force returned here is F_n = -w t_n <= 0.
 """
@@ -121,12 +120,17 @@ def effective_mass(m1, m2):
 
 
 @njit(cache=True)
-def damped_normal(fn, k, v_sep, meff, zeta):
-    """Normal force with the dashpot (module docstring): min(fn + c v_sep, 0),
-    c = 2 zeta sqrt(meff k); fn itself when zeta = 0."""
-    if zeta <= 0.0:
-        return fn
-    return min(fn + 2.0 * zeta * np.sqrt(meff * k) * v_sep, 0.0)
+def damped_traction(tn, kt, rate, meff, length, gn, zeta):
+    """Normal traction with the dashpot on the overlap area (module docstring).
+
+    tn: the law's traction [Pa]; kt its tangent [Pa/m]; rate: dA/dt of the overlap area
+    [m^2/s]; meff: effective mass of the sides [kg/m]; length: the pair's L [m]; gn: |dA/dx| of
+    side A [m]. Returns max(tn + c_A rate, 0) with c_A = 2 zeta sqrt(meff kt / L) / gn, which is
+    zeta times the critical damping of the normal spring k_t gn^2 / L; tn when zeta or gn is 0.
+    """
+    if zeta <= 0.0 or gn <= 0.0:
+        return tn
+    return max(tn + 2.0 * zeta * np.sqrt(meff * kt / length) / gn * rate, 0.0)
 
 
 @njit(cache=True)

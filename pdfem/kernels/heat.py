@@ -184,7 +184,8 @@ def contact_heat(active, nodes, weights, res, temp, h, fraction, dt, width_col, 
     """Heat [J/m] of each active contact p on its side A (qa) and side B (qb) this step.
 
     Conductance: h w (T_B - T_A) dt flows from B to A (w the contact width res[p, width_col],
-    T_A, T_B the weighted temperatures of the two contact edges; a wall side has no
+    T_A, T_B the temperatures at the contact point of the two sides: weights[p, 0:4] and
+    weights[p, 4:8] over nodes[p, 0:4] and nodes[p, 4:8]; a wall side (nodes[p, 4] < 0) has no
     temperature and exchanges nothing). Friction: fraction x the step's frictional
     dissipation res[p, diss_col], half to each side (all of it to A at a wall).
     """
@@ -195,15 +196,18 @@ def contact_heat(active, nodes, weights, res, temp, h, fraction, dt, width_col, 
             continue
         # Friction heat, split between the sides
         fr = fraction * res[p, diss_col]
-        if nodes[p, 2] < 0:
+        if nodes[p, 4] < 0:
             qa[p] += fr
             continue
         qa[p] += 0.5 * fr
         qb[p] += 0.5 * fr
         # Conductance across the contact
         if h > 0.0:
-            ta = weights[p, 0] * temp[nodes[p, 0]] + weights[p, 1] * temp[nodes[p, 1]]
-            tb = weights[p, 2] * temp[nodes[p, 2]] + weights[p, 3] * temp[nodes[p, 3]]
+            ta = 0.0
+            tb = 0.0
+            for k in range(4):
+                ta += weights[p, k] * temp[nodes[p, k]]
+                tb += weights[p, 4 + k] * temp[nodes[p, 4 + k]]
             flow = h * res[p, width_col] * (tb - ta) * dt
             qa[p] += flow
             qb[p] -= flow
@@ -211,7 +215,7 @@ def contact_heat(active, nodes, weights, res, temp, h, fraction, dt, width_col, 
 
 @njit(cache=True)
 def accumulate_heat_sorted(order, active, nodes, weights, qa, qb, n_owned, out):
-    """out[node] += w qa (side A nodes) or w qb (side B), contacts in the given order.
+    """out[node] += w qa (side A nodes, k < 4) or w qb (side B), contacts in the given order.
 
     Only owned nodes 0 <= node < n_owned receive heat; pass contacts sorted by global key.
     """
@@ -219,8 +223,8 @@ def accumulate_heat_sorted(order, active, nodes, weights, qa, qb, n_owned, out):
         p = order[i]
         if active[p] != 1:
             continue
-        for k in range(4):
+        for k in range(nodes.shape[1]):
             nd = nodes[p, k]
-            if nd < 0 or nd >= n_owned:
+            if nd < 0 or nd >= n_owned or weights[p, k] == 0.0:
                 continue
-            out[nd] += weights[p, k] * (qa[p] if k < 2 else qb[p])
+            out[nd] += weights[p, k] * (qa[p] if k < 4 else qb[p])

@@ -163,9 +163,10 @@ WALLS["friction"] = _nonneg("float", 0.0, "Coulomb friction coefficient of frict
 
 # [contact]
 CONTACT = {
-    "kn0": _pos("float", REQUIRED, "normal penalty stiffness", "Pa/m"),
-    "delta_max": _pos("float", REQUIRED, "largest admissible overlap (a deeper one stops the "
-                      "run)", "m"),
+    "kn0": _pos("float", REQUIRED, "normal penalty stiffness: traction per mean overlap "
+                "delta = overlap area / L (L the smaller diameter of the two elements)", "Pa/m"),
+    "delta_max": _pos("float", REQUIRED, "largest admissible mean overlap delta (a deeper one "
+                      "stops the run); the traction's pole", "m"),
     "ks": _nonneg("float", Derived("0.5 kn0"), "tangential penalty stiffness", "Pa/m"),
     "friction": _nonneg("float", 0.0, "Coulomb friction coefficient"),
     "damping": Key("float", 0.0, "normal damping, fraction of the critical damping of the "
@@ -176,7 +177,8 @@ CONTACT = {
 # [contact.pairs."mat1:mat2"]: per material pair overrides
 CONTACT_PAIR = {
     "kn0": _pos("float", Derived("contact.kn0"), "normal penalty stiffness", "Pa/m"),
-    "delta_max": _pos("float", Derived("contact.delta_max"), "largest admissible overlap", "m"),
+    "delta_max": _pos("float", Derived("contact.delta_max"), "largest admissible mean overlap",
+                      "m"),
     "ks": _nonneg("float", Derived("contact.ks if given, else 0.5 kn0 of the pair"),
                   "tangential penalty stiffness", "Pa/m"),
     "friction": _nonneg("float", Derived("contact.friction"), "Coulomb friction coefficient"),

@@ -12,7 +12,7 @@ line tangent to it at delta_c (C1, stiffness frozen at kn0/(1 - rcap)^2); rcap c
 phi(delta) = kn0 delta_max^2 (-ln(1 - r) - r), r = delta/delta_max, on the hyperbola.
 
 Shear: elastic-perfectly plastic and incremental. u_s (the per-contact history) is the elastic
-tangential relative displacement; F_s = ks w u_s with |F_s| <= mu |F_n|; on slip u_s returns to the
+tangential relative displacement; F_s = ks L u_s with |F_s| <= mu |F_n|; on slip u_s returns to the
 limit and the slip times |F_s| is dissipated.
 
 Normal damping (an addition to the report's law, off unless contact.damping > 0): a dashpot
@@ -21,7 +21,8 @@ zeta = 1: critical damping of the contact spring between the masses of the two s
 stops the light boundary nodes of a grain bouncing off a hammer at twice its speed, which
 folds the grain's outer elements at km/s impacts. Its work is the energy term contact_damping.
 
-Sign: tension positive, so the normal force returned here is F_n = -w t_n <= 0.
+Sign: tension positive, so the normal force returned here is F_n = -w t_n <= 0 (normal_force
+with w = 1 gives the traction, its tangent and the energy density).
 """
 
 import numpy as np
@@ -92,9 +93,9 @@ def shear_update(us, dus, w, ks, mu, fn):
     """Incremental elastic-perfectly plastic shear.
 
     us: elastic tangential relative displacement at the start of the step [m]; dus: its increment;
-    w: contact width [m]; fn: the normal force (its magnitude sets the limit mu |fn|).
-    Returns (us_new, Fs, diss): the updated history, the shear force Fs = ks w us_new [N/m] and the
-    frictional dissipation of the step mu |fn| |slip| [J/m].
+    w: the contact's length [m] (contact.py: L); fn: the normal force (its magnitude sets the
+    limit mu |fn|). Returns (us_new, Fs, diss): the updated history, the shear force
+    Fs = ks w us_new [N/m] and the frictional dissipation of the step mu |fn| |slip| [J/m].
     """
     kw = ks * w
     trial = us + dus

@@ -42,7 +42,10 @@ contact_law.damped_traction; its dissipation in a step is (t - t_n) dA.
 
 Orientation. Each pair is evaluated internally with the element of lower global key (egid,
 eloc) as A, whatever order the caller gives, so both orders give bit-identical (mirrored)
-results. Outputs refer to the caller's order: pairs[p, 0] is "A".
+results. Outputs refer to the caller's order: pairs[p, 0] is "A". The overlap is found by
+clipping A by B's edge lines, which needs B convex: when a deformed B is not and A is, A clips
+B instead (a non-convex subject is fine). Where neither is convex the clip is approximate and
+an overlap edge may run past its element edge's end: its share goes to the end node.
 
 Output layout per contact p: active[p] (int8, codes C_*); nodes[p, 0:4] A's nodes, nodes[p, 4:8]
 B's (-1 for a wall); fnod[p, k] the force on nodes[p, k]; weights[p, k] the weight of node k in
@@ -56,10 +59,12 @@ from numba import njit
 from pdfem.kernels.contact_frame import (
     NNOD,
     area_gradient,
+    is_convex,
     loaded_mass,
     nearest_edge,
     overlap_width,
     pair_normal,
+    swap_sides,
 )
 from pdfem.kernels.contact_law import (
     P_DMAX,
@@ -227,7 +232,12 @@ def element_pair_forces(
             a, b = b, a
         element_corners(x, conn, a, xa)
         element_corners(x, conn, b, xb)
-        st, area, cx, cy, k = quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag)
+        # Clipping needs a convex clip polygon: B clips A, unless B is not convex and A is
+        swap = not is_convex(xb) and is_convex(xa)
+        if swap:
+            st, area, cx, cy, k = quad_overlap_area(xb, xa, ox, oy, otag, wx, wy, wtag)
+        else:
+            st, area, cx, cy, k = quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag)
         if st == OV_NONE:
             _clear(p, 0.0, active, nodes, weights, fnod, us_out, res, C_NONE)
             continue
@@ -237,7 +247,11 @@ def element_pair_forces(
             nbad += 1
             continue
         # Contact frame and the boundary edge of each side nearest to the contact point
-        nx, ny = pair_normal(ox, oy, otag, k, ebnd, a, b)
+        if swap:
+            nx, ny = pair_normal(ox, oy, otag, k, ebnd, b, a)
+            nx, ny = -nx, -ny
+        else:
+            nx, ny = pair_normal(ox, oy, otag, k, ebnd, a, b)
         ka, sa = nearest_edge(xa, ebnd, a, cx, cy)
         kb, sb = nearest_edge(xb, ebnd, b, cx, cy)
         length = min(elen[a], elen[b])
@@ -255,7 +269,11 @@ def element_pair_forces(
         wgt[(ka + 1) % 4] = sa
         wgt[4 + kb] = 1.0 - sb
         wgt[4 + (kb + 1) % 4] = sb
-        gax, gay = area_gradient(ox, oy, otag, k, xa, xb, g)
+        if swap:
+            area_gradient(ox, oy, otag, k, xb, xa, g)
+            gax, gay = swap_sides(g)
+        else:
+            gax, gay = area_gradient(ox, oy, otag, k, xa, xb, g)
         meff = effective_mass(loaded_mass(g, nod, m, 0), loaded_mass(g, nod, m, 4))
         us_out[p] = _law(p, g, gax, gay, area, length, nx, ny, wgt, du, nod, us_in[p], params,
                          res, dt, meff)

@@ -1,8 +1,9 @@
-"""Geometry of a contact's overlap polygon (pdfem.kernels.contact): the exact gradient of its
-area with respect to the nodes of the two elements, the contact normal, the overlap's width
-along the tangent, the boundary edge nearest to the contact point, and the lightest node the
-area gradient loads. The polygon is the tagged output of pdfem.kernels.overlap (A is the clip
-subject, T_SRC >= 0 edges lie on A, T_SRC < 0 on B).
+"""Geometry of a contact's overlap polygon (pdfem.kernels.contact): the exact gradient of its area
+with respect to the nodes of the two elements, the contact normal, the overlap's width along the
+tangent, the boundary edge nearest to the contact point, the lightest node the area gradient
+loads, and the convexity test that decides which element clips the other. The polygon is the
+tagged output of pdfem.kernels.overlap (A is the clip subject, T_SRC >= 0 edges lie on A, T_SRC
+< 0 on B).
 """
 
 import numpy as np
@@ -84,6 +85,8 @@ def area_gradient(ox, oy, otag, k, xa, xb, g):
             s = ((mx - xb[j, 0]) * dx + (my - xb[j, 1]) * dy) / (dx * dx + dy * dy)
             r0 = 4 + j
             r1 = 4 + j1
+        # A segment past its edge's end (a clip polygon that is not convex) loads the end node
+        s = min(max(s, 0.0), 1.0)
         # The edge's linear shape functions at the midpoint (exact: the sweep is linear in s)
         g[r0, 0] += (1.0 - s) * ex
         g[r0, 1] += (1.0 - s) * ey
@@ -95,6 +98,34 @@ def area_gradient(ox, oy, otag, k, xa, xb, g):
         gax += g[r, 0]
         gay += g[r, 1]
     return gax, gay
+
+
+@njit(cache=True)
+def swap_sides(g):
+    """Exchange rows 0-3 and 4-7 of g (8, 2) in place; return the new sum of rows 0-3."""
+    sx = 0.0
+    sy = 0.0
+    for r in range(4):
+        for c in range(2):
+            t = g[r, c]
+            g[r, c] = g[4 + r, c]
+            g[4 + r, c] = t
+        sx += g[r, 0]
+        sy += g[r, 1]
+    return sx, sy
+
+
+@njit(cache=True)
+def is_convex(xe):
+    """True when the CCW quad xe (4, 2) is strictly convex (every corner turns left)."""
+    for k in range(4):
+        k1 = k + 1 if k + 1 < 4 else 0
+        k2 = k1 + 1 if k1 + 1 < 4 else 0
+        cr = ((xe[k1, 0] - xe[k, 0]) * (xe[k2, 1] - xe[k1, 1])
+              - (xe[k1, 1] - xe[k, 1]) * (xe[k2, 0] - xe[k1, 0]))
+        if not cr > 0.0:
+            return False
+    return True
 
 
 @njit(cache=True)

@@ -43,9 +43,9 @@ contact_law.damped_traction; its dissipation in a step is (t - t_n) dA.
 Orientation. Each pair is evaluated internally with the element of lower global key (egid,
 eloc) as A, whatever order the caller gives, so both orders give bit-identical (mirrored)
 results. Outputs refer to the caller's order: pairs[p, 0] is "A". The overlap is found by
-clipping A by B's edge lines, which needs B convex: when a deformed B is not and A is, A clips
-B instead (a non-convex subject is fine). Where neither is convex the clip is approximate and
-an overlap edge may run past its element edge's end: its share goes to the end node.
+clipping A by B's edge lines, which needs B convex; a deformed B that is not convex is split
+into two triangles that each clip A (contact_frame.pair_overlap), so the area and its gradient
+stay exact for any shapes the elements take.
 
 Output layout per contact p: active[p] (int8, codes C_*); nodes[p, 0:4] A's nodes, nodes[p, 4:8]
 B's (-1 for a wall); fnod[p, k] the force on nodes[p, k]; weights[p, k] the weight of node k in
@@ -59,12 +59,11 @@ from numba import njit
 from pdfem.kernels.contact_frame import (
     NNOD,
     area_gradient,
-    is_convex,
     loaded_mass,
     nearest_edge,
-    overlap_width,
-    pair_normal,
-    swap_sides,
+    overlap_extent,
+    pair_overlap,
+    side_sum,
 )
 from pdfem.kernels.contact_law import (
     P_DMAX,
@@ -85,7 +84,6 @@ from pdfem.kernels.overlap import (
     alloc_clip_buffers,
     element_corners,
     halfplane_overlap,
-    quad_overlap_area,
 )
 
 # Columns of res[p, :]
@@ -183,7 +181,7 @@ def _law(p, g, gax, gay, area, length, nx, ny, wgt, du, nod, us, params, res, dt
 
 
 @njit(cache=True)
-def _store(p, g, nod, wgt, flip, ox, oy, k, nx, ny, cx, cy, active, nodes, weights, fnod, res):
+def _store(p, g, nod, wgt, flip, width, nx, ny, cx, cy, active, nodes, weights, fnod, res):
     """Outputs of active pair p in the caller's order (A's nodes first; flip: the caller's A is
     our B) and the frame columns of res."""
     j = 4 if flip else 0
@@ -195,7 +193,7 @@ def _store(p, g, nod, wgt, flip, ox, oy, k, nx, ny, cx, cy, active, nodes, weigh
         fnod[p, q, 0] = g[r, 0]
         fnod[p, q, 1] = g[r, 1]
     active[p] = C_ACTIVE
-    res[p, R_WIDTH] = overlap_width(ox, oy, k, -ny, nx)
+    res[p, R_WIDTH] = width
     res[p, R_NX] = sg * nx
     res[p, R_NY] = sg * ny
     res[p, R_CX] = cx
@@ -216,10 +214,12 @@ def element_pair_forces(
     history. Outputs (module docstring): active (np,), nodes (np, 8), weights (np, 8), fnod
     (np, 8, 2), us_out (np,), res (np, NRES). Returns the number of guarded contacts.
     """
-    ox, oy, otag, wx, wy, wtag = alloc_clip_buffers()
+    buf = alloc_clip_buffers()
+    buf2 = alloc_clip_buffers()
     xa = np.empty((4, 2))
     xb = np.empty((4, 2))
     g = np.empty((NNOD, 2))
+    acc = np.empty(4)
     wgt = np.empty(NNOD)
     nod = np.empty(NNOD, np.int64)
     nbad = 0
@@ -232,12 +232,7 @@ def element_pair_forces(
             a, b = b, a
         element_corners(x, conn, a, xa)
         element_corners(x, conn, b, xb)
-        # Clipping needs a convex clip polygon: B clips A, unless B is not convex and A is
-        swap = not is_convex(xb) and is_convex(xa)
-        if swap:
-            st, area, cx, cy, k = quad_overlap_area(xb, xa, ox, oy, otag, wx, wy, wtag)
-        else:
-            st, area, cx, cy, k = quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag)
+        st, area, cx, cy, nx, ny, width = pair_overlap(xa, xb, ebnd, a, b, buf, buf2, g, acc)
         if st == OV_NONE:
             _clear(p, 0.0, active, nodes, weights, fnod, us_out, res, C_NONE)
             continue
@@ -246,12 +241,7 @@ def element_pair_forces(
             _clear(p, us_in[p], active, nodes, weights, fnod, us_out, res, code)
             nbad += 1
             continue
-        # Contact frame and the boundary edge of each side nearest to the contact point
-        if swap:
-            nx, ny = pair_normal(ox, oy, otag, k, ebnd, b, a)
-            nx, ny = -nx, -ny
-        else:
-            nx, ny = pair_normal(ox, oy, otag, k, ebnd, a, b)
+        # The boundary edge of each side nearest to the contact point
         ka, sa = nearest_edge(xa, ebnd, a, cx, cy)
         kb, sb = nearest_edge(xb, ebnd, b, cx, cy)
         length = min(elen[a], elen[b])
@@ -269,16 +259,11 @@ def element_pair_forces(
         wgt[(ka + 1) % 4] = sa
         wgt[4 + kb] = 1.0 - sb
         wgt[4 + (kb + 1) % 4] = sb
-        if swap:
-            area_gradient(ox, oy, otag, k, xb, xa, g)
-            gax, gay = swap_sides(g)
-        else:
-            gax, gay = area_gradient(ox, oy, otag, k, xa, xb, g)
+        gax, gay = side_sum(g, 0)
         meff = effective_mass(loaded_mass(g, nod, m, 0), loaded_mass(g, nod, m, 4))
         us_out[p] = _law(p, g, gax, gay, area, length, nx, ny, wgt, du, nod, us_in[p], params,
                          res, dt, meff)
-        _store(p, g, nod, wgt, flip, ox, oy, k, nx, ny, cx, cy, active, nodes, weights, fnod,
-               res)
+        _store(p, g, nod, wgt, flip, width, nx, ny, cx, cy, active, nodes, weights, fnod, res)
     return nbad
 
 
@@ -297,7 +282,9 @@ def element_wall_forces(
     ox, oy, otag, wx, wy, wtag = alloc_clip_buffers()
     xa = np.empty((4, 2))
     xw = np.empty((0, 2))
+    qw = np.zeros(1, np.int64)
     g = np.empty((NNOD, 2))
+    lohi = np.empty(2)
     wgt = np.zeros(NNOD)
     nod = np.full(NNOD, -1, np.int64)
     nbad = 0
@@ -323,9 +310,13 @@ def element_wall_forces(
             wgt[r] = 0.0
         wgt[ke] = 1.0 - se
         wgt[(ke + 1) % 4] = se
-        gax, gay = area_gradient(ox, oy, otag, k, xa, xw, g)
+        g[:, :] = 0.0
+        area_gradient(ox, oy, otag, k, xa, xw, qw, g)
+        gax, gay = side_sum(g, 0)
         us_out[p] = _law(p, g, gax, gay, area, elen[e], nx, ny, wgt, du, nod, us_in[p], params,
                          res, dt, loaded_mass(g, nod, m, 0))
-        _store(p, g, nod, wgt, False, ox, oy, k, nx, ny, cx, cy, active, nodes, weights, fnod,
-               res)
+        lohi[:] = 0.0
+        overlap_extent(ox, oy, k, -ny, nx, ox[0], oy[0], lohi)
+        _store(p, g, nod, wgt, False, lohi[1] - lohi[0], nx, ny, cx, cy, active, nodes, weights,
+               fnod, res)
     return nbad

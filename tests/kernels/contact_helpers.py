@@ -29,12 +29,14 @@ def inside(p, q):
 
 
 def ref_polygon(p, q):
-    """Brute overlap polygon: inner vertices + edge crossings, sorted by angle (CCW)."""
+    """Brute overlap polygon of convex CCW polygons: inner vertices + edge crossings, sorted
+    by angle (CCW)."""
     pts = [v for v in p if inside(v, q)] + [v for v in q if inside(v, p)]
-    for i in range(4):
-        a, b = p[i], p[(i + 1) % 4]
-        for j in range(4):
-            c, d = q[j], q[(j + 1) % 4]
+    n, m = len(p), len(q)
+    for i in range(n):
+        a, b = p[i], p[(i + 1) % n]
+        for j in range(m):
+            c, d = q[j], q[(j + 1) % m]
             den = (b[0] - a[0]) * (d[1] - c[1]) - (b[1] - a[1]) * (d[0] - c[0])
             if den == 0:
                 continue

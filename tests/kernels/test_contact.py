@@ -506,3 +506,63 @@ def test_contact_lengths_are_the_longest_boundary_edges():
                      for j in range(3) for i in range(3)], np.int64)
     elen = contact_lengths(x, conn, boundary_flags(conn))
     assert list(elen) == [2.0, 1.0, 2.0, 2.0, 0.0, 2.0, 2.0, 1.0, 2.0]
+
+
+def dart(rng):
+    """A random non-convex CCW quad: a triangle with its fourth corner pushed inside."""
+    while True:
+        t = random_quad(rng)[:3]
+        c = t.mean(0)
+        q = np.array([t[0], t[1], t[2], c + rng.uniform(0.1, 0.5) * (c - t[1])])
+        e = np.roll(q, -1, 0) - q
+        cr = e[:, 0] * np.roll(e[:, 1], -1) - e[:, 1] * np.roll(e[:, 0], -1)
+        if (cr < -1e-3).sum() == 1 and (cr > 1e-3).sum() == 3:
+            return q
+
+
+def test_non_convex_element_is_split_and_its_forces_stay_the_energy_gradient():
+    # B a dart (one reflex corner): the clip by B's edge lines would be wrong; split into two
+    # triangles, the overlap is exact (against the brute-force polygons of the two halves, in
+    # either role: A a dart too), its forces are minus the gradient of E, sum to zero and have
+    # no moment
+    rng = np.random.default_rng(21)
+    from pdfem.kernels.contact_frame import is_convex, split_quad
+
+    checked = 0
+    for trial in range(400):
+        xb = dart(rng)
+        xa = random_quad(rng, spread=0.4) if trial % 2 else dart(rng) + rng.uniform(-.3, .3, 2)
+        assert not is_convex(xb)
+        t1, t2 = np.empty((3, 2)), np.empty((3, 2))
+        m1, m2 = np.empty(3, np.int64), np.empty(3, np.int64)
+        assert split_quad(xb, t1, t2, m1, m2)
+        # Brute-force area: A (split too when it is a dart) against B's two triangles
+        parts_a = [xa] if is_convex(xa) else [np.empty((3, 2)), np.empty((3, 2))]
+        if len(parts_a) == 2:
+            split_quad(xa, parts_a[0], parts_a[1], np.empty(3, np.int64), np.empty(3, np.int64))
+        ref = sum(shoelace(ref_polygon(pa, tb))[0] for pa in parts_a for tb in (t1, t2))
+        x, conn, ebnd, egid, eloc, elen = two_elements(xa, xb, elen=1.0)
+        par = law_params(1, kn0=1e9, dmax=1.0, ks=0.0, mu=0.0)
+        pairs = np.array([[0, 1]], np.int64)
+        _, out = run_pairs(x, np.zeros_like(x), conn, ebnd, egid, eloc, elen, pairs, par,
+                           np.zeros(1))
+        act, _, _, fnod, _, res = out
+        if act[0] != C.C_ACTIVE or ref < 1e-3:
+            continue
+        checked += 1
+        assert res[0, C.R_AREA] == pytest.approx(ref, rel=1e-9)
+        f = fnod[0]
+        assert np.abs(f.sum(0)).max() <= 1e-13 * np.abs(f).max()
+        assert abs(moment(x, f, x.mean(0))) <= 1e-12 * np.abs(f).max()
+        fd = np.zeros_like(f)
+        for k in range(8):
+            for c in range(2):
+                e = []
+                for sg in (1.0, -1.0):
+                    xh = x.copy()
+                    xh[k, c] += sg * 1e-7
+                    e.append(run_pairs(xh, np.zeros_like(x), conn, ebnd, egid, eloc, elen,
+                                       pairs, par, np.zeros(1))[1][5][0, C.R_ENERGY])
+                fd[k, c] = -(e[0] - e[1]) / 2e-7
+        assert np.abs(fd - f).max() <= 1e-6 * np.abs(f).max()
+    assert checked > 50

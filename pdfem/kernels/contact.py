@@ -58,6 +58,7 @@ from numba import njit
 
 from pdfem.kernels.contact_frame import (
     NNOD,
+    alloc_overlap_work,
     area_gradient,
     loaded_mass,
     nearest_edge,
@@ -216,6 +217,7 @@ def element_pair_forces(
     """
     buf = alloc_clip_buffers()
     buf2 = alloc_clip_buffers()
+    work = alloc_overlap_work()
     xa = np.empty((4, 2))
     xb = np.empty((4, 2))
     g = np.empty((NNOD, 2))
@@ -232,7 +234,8 @@ def element_pair_forces(
             a, b = b, a
         element_corners(x, conn, a, xa)
         element_corners(x, conn, b, xb)
-        st, area, cx, cy, nx, ny, width = pair_overlap(xa, xb, ebnd, a, b, buf, buf2, g, acc)
+        st, area, cx, cy, nx, ny, width = pair_overlap(xa, xb, ebnd, a, b, buf, buf2, work, g,
+                                                       acc)
         if st == OV_NONE:
             _clear(p, 0.0, active, nodes, weights, fnod, us_out, res, C_NONE)
             continue

@@ -238,26 +238,35 @@ def _real_crossings(ox, oy, otag, k, qmap, st):
 
 
 @njit(cache=True)
-def pair_overlap(xa, xb, ebnd, a, b, buf, buf2, g, acc):
+def alloc_overlap_work():
+    """Scratch arrays of pair_overlap, allocated once per kernel call (not per pair)."""
+    return (np.empty(2), np.arange(4), np.empty((3, 2)), np.empty((3, 2)), np.empty(3, np.int64),
+            np.empty(3, np.int64), np.empty(3))
+
+
+@njit(cache=True)
+def pair_overlap(xa, xb, ebnd, a, b, buf, buf2, work, g, acc):
     """Overlap of elements A (xa) and B (xb), its area gradient added to g (8, 2) (zeroed here)
     and its normal sums in acc (4,). B clips A when B is convex; otherwise B is split into two
     triangles along the diagonal from its reflex corner and each clips A (the clip needs a convex
     clip polygon; A as the subject may have any shape). The diagonal's overlap edges are not on
     B's boundary: they get no force, and the two pieces' shares of them cancel in the area.
 
-    buf, buf2: (ox, oy, otag, wx, wy, wtag) clip buffers (alloc_clip_buffers). Returns (status,
+    buf, buf2: (ox, oy, otag, wx, wy, wtag) clip buffers (alloc_clip_buffers); work: scratch
+    (alloc_overlap_work). Returns (status,
     area, cx, cy, nx, ny, width): status as quad_overlap_area; the unit normal from A into B and
     the width along the tangent (zero unless status is OV_OK).
     """
     ox, oy, otag, wx, wy, wtag = buf
     ox2, oy2, otag2, _, _, _ = buf2
+    lohi, q4, t1, t2, m1, m2, st = work
     for r in range(8):
         g[r, 0] = 0.0
         g[r, 1] = 0.0
     for i in range(4):
         acc[i] = 0.0
-    lohi = np.zeros(2)
-    q4 = np.arange(4)
+    lohi[0] = 0.0
+    lohi[1] = 0.0
     if is_convex(xb):
         st, area, cx, cy, k = quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag)
         if st != OV_OK:
@@ -268,10 +277,6 @@ def pair_overlap(xa, xb, ebnd, a, b, buf, buf2, g, acc):
         overlap_extent(ox, oy, k, -ny, nx, ox[0], oy[0], lohi)
         return OV_OK, area, cx, cy, nx, ny, lohi[1] - lohi[0]
     # Two convex pieces of B
-    t1 = np.empty((3, 2))
-    t2 = np.empty((3, 2))
-    m1 = np.empty(3, np.int64)
-    m2 = np.empty(3, np.int64)
     if not split_quad(xb, t1, t2, m1, m2):
         return OV_INSIDE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     k1 = clip_convex(xa, 4, t1, 3, ox, oy, otag, wx, wy, wtag)
@@ -287,7 +292,7 @@ def pair_overlap(xa, xb, ebnd, a, b, buf, buf2, g, acc):
         return OV_NONE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     cx = (a1 * c1x + a2 * c2x) / area
     cy = (a1 * c1y + a2 * c2y) / area
-    st = np.zeros(3)
+    st[:] = 0.0
     _real_crossings(ox, oy, otag, k1, m1, st)
     _real_crossings(ox2, oy2, otag2, k2, m2, st)
     if st[0] < 2.0:

@@ -15,6 +15,14 @@ from tests.scenes import collision
 FAST = collision(v=200.0, kn0=1e13, dmax=4e-5, end=4e-6).replace("safety = 0.5", "safety = 1.0")
 
 
+def _same(p1, p2):
+    """Two run files hold the same datasets, bit for bit."""
+    a, b = datasets(p1), datasets(p2)
+    assert sorted(a) == sorted(b)
+    for k in a:
+        assert np.array_equal(a[k], b[k]), k
+
+
 def _scene(tmp_path, guards, name="s.toml", text=FAST):
     (tmp_path / name).write_text(text + "\n[guards]\n" + guards)
     return name
@@ -42,10 +50,7 @@ def test_energy_drift_stops_all_ranks_and_keeps_the_last_good_state(tmp_path):
     _scene(tmp_path, "energy_drift = 0.0\n", name="ref.toml")
     p = pdfem(["run", "ref.toml", "-o", "ref.h5", "--quiet"], tmp_path)
     assert p.returncode == 0, p.stderr
-    a, b = datasets(tmp_path / "r.h5"), datasets(tmp_path / "ref.h5")
-    assert sorted(a) == sorted(b)
-    for k in a:
-        assert np.array_equal(a[k], b[k]), k
+    _same(tmp_path / "r.h5", tmp_path / "ref.h5")
 
 
 def test_time_step_remedy_acts_logs_and_completes(tmp_path):
@@ -60,10 +65,7 @@ def test_time_step_remedy_acts_logs_and_completes(tmp_path):
     # The rollback rebuilds from the owned bodies like a restart: 1 rank gives the same bits
     p = pdfem(["run", name, "-o", "r1.h5", "--quiet"], tmp_path)
     assert p.returncode == 0, p.stderr
-    a, b = datasets(tmp_path / "r.h5"), datasets(tmp_path / "r1.h5")
-    assert sorted(a) == sorted(b)
-    for k in a:
-        assert np.array_equal(a[k], b[k]), k
+    _same(tmp_path / "r.h5", tmp_path / "r1.h5")
 
 
 def test_inverted_element_names_body_and_element(tmp_path):

@@ -28,7 +28,7 @@ import math
 
 import numpy as np
 
-from pdfem.kernels.element import q4_strain_energy
+from pdfem.kernels.element_measures import q4_strain_energy
 from pdfem.kernels.integrate import ACC_BC, ACC_CDAMP, ACC_CWORK, ACC_DAMP, ACC_FRIC, body_sums
 from pdfem.parallel.mpi import gather_rows
 

@@ -22,7 +22,8 @@ from pdfem.energy import energy_floor, initial_strain_work
 from pdfem.errors import InputError, SimulationError
 from pdfem.guards import Guards, contact_stiffness_cap
 from pdfem.kernels.checks import first_nonfinite
-from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2, q4_lumped_mass
+from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2
+from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
 from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.stable import q4_stable_dt

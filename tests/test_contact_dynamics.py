@@ -6,8 +6,8 @@ from mpi4py import MPI
 
 from pdfem.energy import global_terms
 from pdfem.kernels import contact_law as L
+from pdfem.kernels.broad_phase import element_bboxes, pairs_from_bboxes
 from pdfem.kernels.contact import C_ACTIVE, NRES, element_pair_forces, element_wall_forces
-from pdfem.kernels.overlap import element_bboxes, pairs_from_bboxes
 from pdfem.scene import parse_scene
 from pdfem.solver import Simulation
 from tests.scenes import ELASTIC, collision, settling_bed

@@ -8,7 +8,7 @@ from mpi4py import MPI
 from pdfem.driver import run
 from pdfem.effects import REGISTRY
 from pdfem.errors import InputError
-from pdfem.kernels.element import q4_lumped_mass
+from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.heat import conduction_flows, element_to_nodes
 from pdfem.kernels.params import COND, NPAR, RHO
 from pdfem.scene import parse_scene

@@ -16,7 +16,7 @@ import math
 
 import numpy as np
 
-from pdfem.kernels.element import q4_lumped_mass
+from pdfem.kernels.element_measures import q4_lumped_mass
 
 # Face normals of a lattice hexagon (towards the six neighbours)
 _PHI = np.arange(6) * (np.pi / 3.0)

@@ -23,6 +23,7 @@ from mpi4py import MPI
 from pdfem.effects.base import Effect
 from pdfem.errors import InputError
 from pdfem.kernels import contact_law as L
+from pdfem.kernels.broad_phase import candidate_pairs, element_bboxes, wall_crossings
 from pdfem.kernels.contact import (
     C_ACTIVE,
     NNOD,
@@ -45,7 +46,6 @@ from pdfem.kernels.neighbours import (
     lookup_sorted,
     pack_keys,
 )
-from pdfem.kernels.overlap import candidate_pairs, element_bboxes, wall_crossings
 from pdfem.parallel.exchange import body_centroids
 from pdfem.parallel.mpi import allgather_rows
 

@@ -27,7 +27,7 @@ from mpi4py import MPI
 
 from pdfem.effects.base import Effect
 from pdfem.effects.thermal import fill_column
-from pdfem.kernels.element import q4_lumped_mass
+from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.heat import (
     advance_temperature,
     conduction_flows,

@@ -56,6 +56,7 @@ contact heat's interpolation); us_out[p] the new shear history; res[p, :] the sc
 import numpy as np
 from numba import njit
 
+from pdfem.kernels.broad_phase import element_corners
 from pdfem.kernels.contact_frame import (
     NNOD,
     alloc_overlap_work,
@@ -83,7 +84,6 @@ from pdfem.kernels.overlap import (
     OV_OK,
     OV_OVERFLOW,
     alloc_clip_buffers,
-    element_corners,
     halfplane_overlap,
 )
 

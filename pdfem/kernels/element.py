@@ -29,10 +29,9 @@ there, leaving that element partly updated (the run must then abort).
 import numpy as np
 from numba import njit
 
-from pdfem.kernels.elastic import elastic_energy_density
 from pdfem.kernels.element_fast import q4_forces_1pt_fast
 from pdfem.kernels.material import material_update, softened
-from pdfem.kernels.params import ALPHA, BULK, CAP, ELASTIC, MODEL, RHO, SHEAR, SOFT_K, SOFT_Y
+from pdfem.kernels.params import ALPHA, BULK, CAP, ELASTIC, MODEL, SHEAR, SOFT_K, SOFT_Y
 
 GP = 0.5773502691896257  # 1/sqrt(3), 2x2 Gauss abscissa
 XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
@@ -356,85 +355,3 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
                 fe[i, 1] += dv * (s[2] * dx[i] + s[1] * dy[i])
         _scatter(conn, e, fe, f)
     return -1
-
-
-@njit(cache=True)
-def q4_lumped_mass(x, conn, emat, mat_params, e0, e1, m):
-    """Add the row-sum lumped mass rho int N_I dA (2x2 Gauss, exact) of [e0, e1) to m (nn,).
-
-    Call once on the initial configuration: mass is then conserved by construction.
-    """
-    xc = np.empty((4, 2))
-    dx = np.empty(4)
-    dy = np.empty(4)
-    for e in range(e0, e1):
-        rho = mat_params[emat[e], RHO]
-        for i in range(4):
-            xc[i, 0] = x[conn[e, i], 0]
-            xc[i, 1] = x[conn[e, i], 1]
-        for ip in range(4):
-            xi = GP * XI[ip]
-            eta = GP * ETA[ip]
-            # Weight of node i at this point: rho N_i det J
-            det = _ip_grad(xc, xi, eta, dx, dy)
-            for i in range(4):
-                nn = 0.25 * (1.0 + XI[i] * xi) * (1.0 + ETA[i] * eta)
-                m[conn[e, i]] += rho * nn * det
-
-
-@njit(cache=True)
-def q4_strain_energy(x, conn, emat, mat_params, sig, hgq, hg_coef, e0, e1, out):
-    """out[e] = stored elastic energy of element e in [e0, e1) [J/m].
-
-    Sum over points of elastic_energy_density(sig) x point volume (current configuration);
-    for the 1-point rule with hgq.shape[0] > 0 and hg_coef > 0 also 0.5 Q.Q / k. A
-    non-positive area / Jacobian contributes its (non-positive) volume as is.
-    """
-    nip = sig.shape[1]
-    xc = np.empty((4, 2))
-    dx = np.empty(4)
-    dy = np.empty(4)
-    for e in range(e0, e1):
-        p = mat_params[emat[e]]
-        for i in range(4):
-            xc[i, 0] = x[conn[e, i], 0]
-            xc[i, 1] = x[conn[e, i], 1]
-        en = 0.0
-        if nip == 1:
-            # Centroid rule plus the hourglass spring energy
-            a = _bvec(xc, dx, dy)
-            en = elastic_energy_density(p, sig[e, 0]) * a
-            if hgq.shape[0] > 0 and hg_coef > 0.0 and a > 0.0:
-                k = hg_coef * _hg_stiffness(p, a, dx, dy)
-                en += 0.5 * (hgq[e, 0] * hgq[e, 0] + hgq[e, 1] * hgq[e, 1]) / k
-        else:
-            # 2x2 Gauss points
-            for ip in range(4):
-                dv = _ip_grad(xc, GP * XI[ip], GP * ETA[ip], dx, dy)
-                en += elastic_energy_density(p, sig[e, ip]) * dv
-        out[e] = en
-
-
-@njit(cache=True)
-def q4_jacobian_ratio(x, conn, e0, e1, out):
-    """out[e] = min / max of det J over the 4 corners of element e in [e0, e1).
-
-    Corner I has det J = ((x_{I+1} - x_I) x (x_{I-1} - x_I)) / 4. 1 for a parallelogram;
-    <= 0 means a corner is inverted (-1.0 when no corner is positive).
-    """
-    for e in range(e0, e1):
-        jmin = np.inf
-        jmax = -np.inf
-        for i in range(4):
-            n = conn[e, i]
-            nf = conn[e, (i + 1) % 4]
-            nb = conn[e, (i + 3) % 4]
-            # Cross product of the two edges leaving corner i
-            ax = x[nf, 0] - x[n, 0]
-            ay = x[nf, 1] - x[n, 1]
-            bx = x[nb, 0] - x[n, 0]
-            by = x[nb, 1] - x[n, 1]
-            d = 0.25 * (ax * by - ay * bx)
-            jmin = min(jmin, d)
-            jmax = max(jmax, d)
-        out[e] = jmin / jmax if jmax > 0.0 else -1.0

@@ -22,8 +22,8 @@ compression negative; a compression (area decrease) of an expanding material hea
 import numpy as np
 from numba import njit
 
+from pdfem.kernels.broad_phase import element_corners
 from pdfem.kernels.element import ETA, GP, XI, _ip_grad
-from pdfem.kernels.overlap import element_corners
 from pdfem.kernels.params import ALPHA, BULK, COND, CP, RHO
 from pdfem.kernels.stable import element_length
 

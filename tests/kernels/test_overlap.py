@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from pdfem.kernels import broad_phase as BP
 from pdfem.kernels import overlap as O
 from tests.kernels.contact_helpers import SQ, random_quad, ref_polygon, rot, shoelace
 
@@ -185,19 +186,19 @@ def test_candidate_pairs_equal_brute_force():
     ebnd, egid, eloc = np.vstack(ebnds), np.concatenate(gids), np.concatenate(elocs)
     ebnd[rng.random(ebnd.shape) < 0.1] = 0
     bbox = np.zeros((ne, 4))
-    O.element_bboxes(x, conn, 0, ne, bbox)
+    BP.element_bboxes(x, conn, 0, ne, bbox)
     assert np.array_equal(bbox[:, :2], np.stack([x[conn].min(1)[:, i] for i in (0, 1)], 1))
     skin = 0.1
     out = np.zeros((10, 2), np.int64)
-    n = O.pairs_from_bboxes(bbox, ebnd, egid, eloc, 0, ne, skin, out)
+    n = BP.pairs_from_bboxes(bbox, ebnd, egid, eloc, 0, ne, skin, out)
     assert n > 10
     brute = np.zeros((n, 2), np.int64)
-    assert O.pairs_from_bboxes(bbox, ebnd, egid, eloc, 0, ne, skin, brute) == n
+    assert BP.pairs_from_bboxes(bbox, ebnd, egid, eloc, 0, ne, skin, brute) == n
     bp = np.array([(i, j) for i in range(40) for j in range(i + 1, 40)], np.int64)
     bp[::2] = bp[::2, ::-1]
     cand = np.zeros((n + 5, 2), np.int64)
     assert (
-        O.candidate_pairs(bbox, ebnd, egid, eloc, np.array(e0), np.array(e1), bp, skin, cand) == n
+        BP.candidate_pairs(bbox, ebnd, egid, eloc, np.array(e0), np.array(e1), bp, skin, cand) == n
     )
     cand = cand[:n]
     assert {tuple(p) for p in brute} == {tuple(p) for p in cand}

@@ -1,0 +1,69 @@
+"""Whole-element measures of the 4-node quad: lumped mass and stored elastic energy.
+
+Same element as :mod:`pdfem.kernels.element` (node order, natural coordinates, 2x2 points,
+1-point hourglass springs); these kernels read a state and never change it.
+"""
+
+import numpy as np
+from numba import njit
+
+from pdfem.kernels.elastic import elastic_energy_density
+from pdfem.kernels.element import ETA, GP, XI, _bvec, _hg_stiffness, _ip_grad
+from pdfem.kernels.params import RHO
+
+
+@njit(cache=True)
+def q4_lumped_mass(x, conn, emat, mat_params, e0, e1, m):
+    """Add the row-sum lumped mass rho int N_I dA (2x2 Gauss, exact) of [e0, e1) to m (nn,).
+
+    Call once on the initial configuration: mass is then conserved by construction.
+    """
+    xc = np.empty((4, 2))
+    dx = np.empty(4)
+    dy = np.empty(4)
+    for e in range(e0, e1):
+        rho = mat_params[emat[e], RHO]
+        for i in range(4):
+            xc[i, 0] = x[conn[e, i], 0]
+            xc[i, 1] = x[conn[e, i], 1]
+        for ip in range(4):
+            xi = GP * XI[ip]
+            eta = GP * ETA[ip]
+            # Weight of node i at this point: rho N_i det J
+            det = _ip_grad(xc, xi, eta, dx, dy)
+            for i in range(4):
+                nn = 0.25 * (1.0 + XI[i] * xi) * (1.0 + ETA[i] * eta)
+                m[conn[e, i]] += rho * nn * det
+
+
+@njit(cache=True)
+def q4_strain_energy(x, conn, emat, mat_params, sig, hgq, hg_coef, e0, e1, out):
+    """out[e] = stored elastic energy of element e in [e0, e1) [J/m].
+
+    Sum over points of elastic_energy_density(sig) x point volume (current configuration);
+    for the 1-point rule with hgq.shape[0] > 0 and hg_coef > 0 also 0.5 Q.Q / k. A
+    non-positive area / Jacobian contributes its (non-positive) volume as is.
+    """
+    nip = sig.shape[1]
+    xc = np.empty((4, 2))
+    dx = np.empty(4)
+    dy = np.empty(4)
+    for e in range(e0, e1):
+        p = mat_params[emat[e]]
+        for i in range(4):
+            xc[i, 0] = x[conn[e, i], 0]
+            xc[i, 1] = x[conn[e, i], 1]
+        en = 0.0
+        if nip == 1:
+            # Centroid rule plus the hourglass spring energy
+            a = _bvec(xc, dx, dy)
+            en = elastic_energy_density(p, sig[e, 0]) * a
+            if hgq.shape[0] > 0 and hg_coef > 0.0 and a > 0.0:
+                k = hg_coef * _hg_stiffness(p, a, dx, dy)
+                en += 0.5 * (hgq[e, 0] * hgq[e, 0] + hgq[e, 1] * hgq[e, 1]) / k
+        else:
+            # 2x2 Gauss points
+            for ip in range(4):
+                dv = _ip_grad(xc, GP * XI[ip], GP * ETA[ip], dx, dy)
+                en += elastic_energy_density(p, sig[e, ip]) * dv
+        out[e] = en

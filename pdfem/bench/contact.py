@@ -92,6 +92,19 @@ def _sample(sim, eff, n, k):
             evaluated / k, active / k, (tm["elements"] - e0) / k)
 
 
+def _drift_check_s(sim, repeat):
+    """Median wall time of the energy-drift guard's per-step work (the fixed-point sums of
+    pdfem.energy, which the driver runs every guards.energy_steps steps) [s]."""
+    from pdfem.energy import fixed_point_terms
+
+    times = []
+    for _ in range(max(repeat, 3)):
+        t0 = time.perf_counter()
+        fixed_point_terms(sim)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
 def run_contact(n, repeat, material="elastic"):
     """Build an n-grain bed of ``material`` grains (pdfem.bench.beds.MATERIALS), time
     ``repeat`` samples; return a dict of figures."""
@@ -121,11 +134,12 @@ def run_contact(n, repeat, material="elastic"):
                                         for col in zip(*samples, strict=True))
     share = statistics.median((s[1] + s[2]) / s[0] for s in samples)
     coord = _coordination(eff, n)
+    drift = _drift_check_s(sim, repeat)
     # Resident memory after the steps, freed pages returned (what the run holds)
     trim()
     out = {"grains": n, "elements": int(sim.store.ne_own), "steps": k, "step": step,
            "detection": det, "forces": frc, "elements_s": elem, "contact": det + frc,
-           "share": share,
+           "share": share, "drift": drift,
            "evaluated": evald, "active": act, "coordination": coord, "setup": setup,
            "rebuilds": sim.timers.calls["migration"] - reb0,
            "rss_per_grain": (rss_bytes() - rss0) / n,
@@ -167,7 +181,9 @@ def print_contact(sizes, repeat, log=print, material="elastic"):
             f"{1e6 * r['elements_s'] / r['grains']:.3f}, contact "
             f"{1e6 * r['contact'] / r['grains']:.3f}; set-up {r['setup']:.2f} s); memory "
             f"{r['rss_per_grain'] / 1024:.2f} kB/grain resident after the steps, peak "
-            f"{r['peak_per_grain'] / 1024:.2f} kB/grain")
+            f"{r['peak_per_grain'] / 1024:.2f} kB/grain; the energy-drift check "
+            f"{1e6 * r['drift'] / r['grains']:.3f} us/grain ({100 * r['drift'] / r['step']:.1f} % "
+            "of a step, guards.energy_steps = 1)")
     if len(rows) > 1:
         lo, hi = rows[0], rows[-1]
         ratio = (hi["contact"] / hi["grains"]) / (lo["contact"] / lo["grains"])

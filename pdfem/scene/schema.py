@@ -297,7 +297,11 @@ OUTPUT = {
 # [guards]
 GUARDS = {
     "energy_drift": _nonneg("float", 0.1, "stop when the energy-balance error exceeds this "
-                            "(checked at every energy sample); 0 = never"),
+                            "(checked at every energy sample and every energy_steps steps); "
+                            "0 = never"),
+    "energy_steps": _nonneg("int", 1, "steps between the drift checks that run between the "
+                            "energy samples (a fixed-point sum, one allreduce); 0 = at the "
+                            "samples only"),
     "snapshot_steps": Key("int", 200, "steps between in-memory copies of the state: the last "
                           "good state written on a failure is at most this old", lo=1),
     "dt_retries": _nonneg("int", 0, "remedy: on a failed check, go back to the last good "

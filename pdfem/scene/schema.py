@@ -300,7 +300,7 @@ GUARDS = {
                             "(checked at every energy sample and every energy_steps steps); "
                             "0 = never"),
     "energy_steps": _nonneg("int", 1, "steps between the drift checks that run between the "
-                            "energy samples (a fixed-point sum, one allreduce); 0 = at the "
+                            "energy samples (fixed-point sums, two allreduces); 0 = at the "
                             "samples only"),
     "snapshot_steps": Key("int", 200, "steps between in-memory copies of the state: the last "
                           "good state written on a failure is at most this old", lo=1),

@@ -95,7 +95,7 @@ def _run(sim, out_path, quiet, log):
             rows.append(_row(sim.t, terms, ref, sim.energy_floor))
     guards.keep(sim, counters())
     # The t = 0 terms on every rank, for the drift check between samples
-    guards.set_reference(comm.bcast(ref, root=0), sim.energy_floor)
+    guards.ref = comm.bcast(ref, root=0)
     guards.sample_scale = _sample_scale(comm, rows, ref, sim.energy_floor)
     while sim.t < sim.t_end * (1 - 1e-12):
         if sim.max_steps and sim.nstep >= sim.max_steps:
@@ -198,7 +198,9 @@ def _drift_check(sim, guards):
     if not guards.sample_scale > 0.0:
         return
     terms = fixed_point_terms(sim)
-    err = math.inf if terms is None else guards.balance_error(terms)
+    # The samples' largest scale joins the floor: the scale is never below it
+    floor = max(sim.energy_floor, guards.sample_scale)
+    err = math.inf if terms is None else balance(terms, guards.ref, floor)[1]
     if not err <= guards.energy_drift:
         raise SimulationError(f"step {sim.nstep}, t={sim.t:.6e} s: check energy drift: the "
                               f"energy-balance error {err:.3e} exceeds guards.energy_drift = "

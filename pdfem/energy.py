@@ -147,7 +147,6 @@ def balance_scale(terms, ref, floor=0.0):
                 for v in (terms, ref)] + [floor])
 
 
-
 def fixed_point_terms(sim):
     """{term: global sum} on every rank, from integer multiples of a per-term quantum (see
     the module note), or None when a value is not finite."""
@@ -167,7 +166,7 @@ def fixed_point_sums(rows, comm, nbody):
     column_extent(rows, top)
     gtop = np.empty_like(top)
     comm.Allreduce(top, gtop, op=MPI.MAX)
-    if gtop[nt] or not np.isfinite(gtop).all():
+    if gtop[nt]:
         return None
     # Integer multiples of a power of two per column: nbody of them cannot overflow int64
     q, k = np.empty(nt), np.empty(nt, np.int64)

@@ -20,7 +20,6 @@ import math
 import numpy as np
 from mpi4py import MPI
 
-from pdfem.energy import DIAGNOSTIC, SIGN, TERMS
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact_law import DT_FACTOR
 from pdfem.kernels.stable import q4_stable_dt
@@ -47,35 +46,15 @@ class Guards:
         g = sim.resolved["guards"]
         self.energy_drift = g["energy_drift"]
         self.energy_steps = g["energy_steps"]
-        # The balance at t = 0, on every rank, for the drift check between samples (driver),
-        # and the largest scale of the samples after t = 0 (0: none yet, the check waits)
-        self._ref = None
+        # The t = 0 terms, on every rank, for the drift check between samples (driver), and
+        # the largest balance scale of the samples after t = 0 (0: none yet, the check waits)
+        self.ref = None
         self.sample_scale = 0.0
         self.every = g["snapshot_steps"]
         self.retries_left = g["dt_retries"]
         self.retries = g["dt_retries"]
         self.last = None
         self.actions = []
-
-    def set_reference(self, ref, floor):
-        """Keep what the drift check compares with: the t = 0 terms ``ref`` and the floor of
-        the balance's scale (pdfem.energy.balance, precomputed for a check every step)."""
-        parts = [t for t in TERMS if t not in DIAGNOSTIC]
-        signs = [SIGN.get(t, 1.0) for t in parts]
-        total0 = sum(g * ref[t] for g, t in zip(signs, parts, strict=True))
-        scale0 = max([abs(ref[t]) for t in parts if t != "potential"] + [floor])
-        self._ref = (parts, signs, total0, scale0, ref.get("potential", 0.0))
-
-    def balance_error(self, terms):
-        """pdfem.energy.balance(terms, ref, floor)[1], from the kept reference, with a scale
-        never below the largest of the samples so far (sample_scale)."""
-        parts, signs, total0, scale0, pot0 = self._ref
-        vals = [terms[t] for t in parts]
-        total = sum(g * v for g, v in zip(signs, vals, strict=True))
-        scale = max(scale0, self.sample_scale,
-                    max(abs(v - pot0) if t == "potential" else abs(v)
-                        for t, v in zip(parts, vals, strict=True)))
-        return abs(total - total0) / scale if scale > 0 else 0.0
 
     def due(self, sim):
         """True when a snapshot is to be taken after this step."""

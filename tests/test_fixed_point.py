@@ -67,20 +67,17 @@ def test_a_non_finite_value_is_refused():
     assert fixed_point_sums(np.empty((0, 2)), SELF, 0) == [0.0, 0.0]
 
 
-def test_the_drift_checks_balance_is_the_samples_balance():
-    from pdfem.energy import TERMS, balance
-    from pdfem.guards import Guards
+def test_the_samples_scale_bounds_the_drift_checks_error():
+    # The drift check's error is balance() with the samples' largest scale in the floor: the
+    # same as the samples' own error while that scale is not larger, and bounded by it else
+    from pdfem.energy import TERMS, balance, balance_scale
 
     rng = np.random.default_rng(9)
-    g = Guards.__new__(Guards)
-    g.sample_scale = 0.0
     for floor in (0.0, 1e-3, 1e3):
         ref = {t: float(v) for t, v in zip(TERMS, rng.normal(0, 10, len(TERMS)), strict=True)}
-        g.set_reference(ref, floor)
         for _ in range(20):
             terms = {t: ref[t] + float(rng.normal(0, 3)) for t in TERMS}
-            assert g.balance_error(terms) == balance(terms, ref, floor)[1]
-    # A larger scale seen at an earlier sample bounds the error from below
-    g.sample_scale = 1e6
+            small = min(balance_scale(terms, ref, floor), 1e-6)
+            assert balance(terms, ref, max(floor, small))[1] == balance(terms, ref, floor)[1]
     terms = {t: ref[t] + 1.0 for t in TERMS}
-    assert g.balance_error(terms) <= abs(balance(terms, ref, floor)[0] - balance(ref, ref)[0]) / 1e6
+    assert balance(terms, ref, 1e6)[1] <= abs(balance(terms, ref)[0] - balance(ref, ref)[0]) / 1e6

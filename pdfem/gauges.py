@@ -1,11 +1,14 @@
-"""Gauges: time histories of the mean velocity and stress of a set of elements.
+"""Gauges: time histories of the mean velocity and stress of a set of elements, and of the
+contact force on their nodes.
 
 A gauge is a set of elements of one body: a block's elements along one side (the hammer's
 bottom row, the chamber bottom's top row, the report's fig. 12), one element of a block, or
 the element that contains a given point at t = 0. Each sample is the area-weighted mean over
 the gauge's elements of the element velocity (mean of its four nodes) and of the Cauchy stress
-(mean over its integration points; xx, yy, xy, zz, tension positive). Only the rank that
-owns the body contributes (rank 0 for blocks), so a sample is the same on any rank count.
+(mean over its integration points; xx, yy, xy, zz, tension positive), and the sum over the
+gauge elements' nodes of the contact forces [N/m] (what the bed pushes on a hammer's bottom
+row: a rigid, driven piston has no strain and so no stress to read). Only the rank that owns
+the body contributes (rank 0 for blocks), so a sample is the same on any rank count.
 """
 
 import numpy as np
@@ -13,8 +16,8 @@ from mpi4py import MPI
 
 from pdfem.errors import InputError
 
-# Columns of one sample: velocity (2) then stress (4)
-NCOL = 6
+# Columns of one sample: velocity (2), stress (4), contact force (2)
+NCOL = 8
 
 
 def block_elements(nx, ny, side):
@@ -94,9 +97,13 @@ class Gauges:
                           - (xe[:, 3, 0] - xe[:, 1, 0]) * (xe[:, 2, 1] - xe[:, 0, 1]))
             acc[i, 0] = area.sum()
             acc[i, 1:3] = (area[:, None] * ve.mean(axis=1)).sum(axis=0)
-            acc[i, 3:] = (area[:, None] * s.sig[e].mean(axis=1)).sum(axis=0)
+            acc[i, 3:7] = (area[:, None] * s.sig[e].mean(axis=1)).sum(axis=0)
+            if sim.fc.shape[0]:
+                acc[i, 7:] = sim.fc[np.unique(s.conn[e])].sum(axis=0)
         comm.Allreduce(MPI.IN_PLACE, acc, op=MPI.SUM)
-        return acc[:, 1:] / np.where(acc[:, :1] > 0.0, acc[:, :1], 1.0)
+        # Area-weighted means of velocity and stress; the force is a sum
+        means = acc[:, 1:7] / np.where(acc[:, :1] > 0.0, acc[:, :1], 1.0)
+        return np.concatenate([means, acc[:, 7:]], axis=1)
 
     def sample(self, sim):
         """Record one sample (collective; rank 0 keeps the history)."""

@@ -19,6 +19,7 @@ from pdfem import build
 from pdfem.effects import active_effects
 from pdfem.effects.contact import check_contact_scene
 from pdfem.energy import energy_floor, initial_strain_work
+from pdfem.drive import Drives
 from pdfem.errors import InputError, SimulationError
 from pdfem.guards import Guards, contact_stiffness_cap
 from pdfem.kernels.checks import first_nonfinite
@@ -81,6 +82,7 @@ class Simulation:
             self._build_restart(restart)
         for eff in self.effects:
             eff.setup(self)
+        self.drives = Drives(self)
         self.guards = Guards(self)
         self._cap_contact(restart)
         self.energy_floor = energy_floor(self)
@@ -356,6 +358,8 @@ class Simulation:
         """Eq. 68 with the average of the two half steps; BCs, damping, kinetic energy."""
         s = self.store
         dt_avg = 0.5 * (self.dt_prev + self.dt)
+        if len(self.drives):
+            self.drives.apply(self, self.t + 0.5 * self.dt)
         with self.timers.phase("integration"):
             advance_velocities(s.v, self.f, s.m, s.bcf, s.bcv, self.gamma, dt_avg, s.nn_own,
                                s.node_body, s.acc, self.kin[: s.nb_own], first, self.fc)

@@ -90,35 +90,119 @@ def front_positions(time, grain_y, grain_vy, grain_mass, hammer_y, hammer_vy, an
     return {"y_f": yf, "depth": y_top0 - yf, "shocked": shocked, "t_impact": t_imp}
 
 
-def fit_front(time, depth, H0, lo=0.15, hi=0.85, min_frames=3):
-    """Least-squares Us: slope of depth vs time over lo*H0 <= d <= hi*H0.
-
-    The window runs from the first frame reaching lo*H0 to the last before the front first
-    passes hi*H0. Returns us, intercept (d = us t + intercept), the window and its frames,
-    the rms residual of the depths (the front's noise);
-    us is NaN with ``reason`` when fewer than ``min_frames`` frames qualify.
-    """
-    d = np.asarray(depth, float)
-    out = {"us": NAN, "intercept": NAN, "t_start": NAN, "t_end": NAN, "frames": np.array([], int),
-           "n": 0, "reason": "", "lo": lo, "hi": hi, "rms": NAN}
-    start = np.flatnonzero(d >= lo * H0)
-    if start.size == 0:
-        out["reason"] = f"the front never reached {lo:.0%} of the bed height"
-        return out
-    past = np.flatnonzero(d > hi * H0)
-    stop = past[0] if past.size else len(d)
-    idx = np.arange(start[0], stop)
-    idx = idx[(d[idx] >= lo * H0) & (d[idx] <= hi * H0)]
-    out.update(frames=idx, n=int(idx.size))
-    if idx.size < min_frames:
-        out["reason"] = (f"only {idx.size} frame(s) with the front between {lo:.0%} and {hi:.0%}"
-                         f" of the bed height (need {min_frames})")
-        return out
-    us, b = np.polyfit(time[idx], d[idx], 1)
-    rms = np.sqrt(np.mean((d[idx] - us * time[idx] - b) ** 2))
-    out.update(us=float(us), intercept=float(b), t_start=float(time[idx[0]]),
-               t_end=float(time[idx[-1]]), rms=float(rms))
+def passage_times(time, grain_vy, speed):
+    """First time each grain's downward velocity reaches ``speed`` (linear between frames);
+    NaN for a grain that never does. (ng,)"""
+    u = -np.asarray(grain_vy, float)
+    hit = u >= speed
+    out = np.full(u.shape[1], NAN)
+    for i in np.flatnonzero(hit.any(axis=0)):
+        k = int(np.argmax(hit[:, i]))
+        if k == 0:
+            out[i] = time[0]
+            continue
+        a0, a1 = u[k - 1, i] - speed, u[k, i] - speed
+        out[i] = time[k - 1] + (0.0 - a0) / (a1 - a0) * (time[k] - time[k - 1])
     return out
+
+
+def front_fit(depth0, tpass, H0, lo=0.15, hi=0.85):
+    """Front speed from the grains' first passages: least squares of t_i = d_i / Us + t0 over
+    the grains whose initial centroid depth d_i lies in [lo, hi] H0 (the material ahead of the
+    front is at rest, so Us is the front's speed in the lab). Time is the regressed
+    variable: the scatter is in the passage times, the depths are exact.
+
+    Returns us, its standard error ``se``, ``t0``, the grains used ``n`` and those of the
+    window that never passed (``missing``), the rms scatter of the passage times, the times
+    t_start and t_end at which the fitted front passes lo H0 and hi H0, and ``passed``: at
+    least half of the grains in the window's deepest quarter were passed within the run (the
+    front crossed the window; grains closer to the anvil may be stopped by it before the front
+    reaches them, and a grain pushed aside into a pore may never reach the speed: such grains
+    are left out). us is NaN with ``reason`` when fewer than 4 grains qualify.
+    """
+    d0, tp = np.asarray(depth0, float), np.asarray(tpass, float)
+    win = (d0 >= lo * H0) & (d0 <= hi * H0)
+    last = win & (d0 >= (hi - 0.25 * (hi - lo)) * H0)
+    ok = win & np.isfinite(tp)
+    out = {"us": NAN, "se": NAN, "t0": NAN, "n": int(ok.sum()),
+           "missing": int((win & ~np.isfinite(tp)).sum()), "rms": NAN, "t_start": NAN,
+           "t_end": NAN, "lo": lo, "hi": hi, "reason": "",
+           "passed": bool(last.any() and np.mean(np.isfinite(tp[last])) >= 0.5)}
+    if ok.sum() < 4:
+        out["reason"] = (f"only {ok.sum()} grain(s) between {lo:.0%} and {hi:.0%} of the bed "
+                         "height were passed (need 4)")
+        return out
+    (slope, t0), cov = np.polyfit(d0[ok], tp[ok], 1, cov=True)
+    if not slope > 0:
+        out["reason"] = "the passage times do not grow with depth"
+        return out
+    rms = np.sqrt(np.mean((tp[ok] - slope * d0[ok] - t0) ** 2))
+    out.update(us=float(1.0 / slope), se=float(np.sqrt(cov[0, 0]) / slope ** 2),
+               t0=float(t0), rms=float(rms), t_start=float(t0 + slope * lo * H0),
+               t_end=float(t0 + slope * hi * H0))
+    return out
+
+
+def steady_front(depth0, tpass, H0, tol, lo=0.15, hi=0.85):
+    """A front speed only for a front that crossed the whole window and was not seen to
+    change speed.
+
+    Fits :func:`front_fit` over lo-hi of the bed height and over its two halves; their
+    difference is judged against ``tol`` times the whole window's speed and against twice
+    its standard error s (from the fits' scatter):
+
+    - ``steadiness = "steady"``: the halves agree within tol, and s is within tol (a change
+      of tol would have shown);
+    - ``"unresolved"``: the halves agree within 2 s but s exceeds tol (a narrow bed's scatter
+      hides a change of tol): fitted, and said so;
+    - ``"unsteady"``: the halves differ by more than tol and more than 2 s, or the front did
+      not cross the window within the run: ``us`` is NaN and ``reason`` says why
+      ("no steady front: ...").
+
+    The halves' speeds and the whole window's fit (``us_fit``) are reported either way.
+    """
+    mid = 0.5 * (lo + hi)
+    fit = front_fit(depth0, tpass, H0, lo, hi)
+    early, late = front_fit(depth0, tpass, H0, lo, mid), front_fit(depth0, tpass, H0, mid, hi)
+    out = dict(fit, us_fit=fit["us"], us_early=early["us"], us_late=late["us"],
+               se_early=early["se"], se_late=late["se"], steadiness="unsteady")
+    diff = abs(early["us"] - late["us"])
+    noise = np.hypot(early["se"], late["se"])
+    if not fit["passed"]:
+        deepest = np.nanmax(np.where(np.isfinite(tpass), depth0, np.nan)) / H0 \
+            if np.isfinite(tpass).any() else 0.0
+        out["reason"] = (f"no steady front: it did not cross {hi:.0%} of the bed height within "
+                         f"the run (deepest grain passed at {deepest:.0%})")
+    elif not (np.isfinite(fit["us"]) and np.isfinite(diff)):
+        out["reason"] = f"no steady front: {fit['reason'] or early['reason'] or late['reason']}"
+    elif diff <= tol * fit["us"] and noise <= tol * fit["us"]:
+        out["steadiness"] = "steady"
+    elif diff <= 2.0 * noise:
+        out["steadiness"] = "unresolved"
+        out["reason"] = (f"steadiness not resolved: the halves' speeds {early['us']:.0f} and "
+                         f"{late['us']:.0f} m/s carry a standard error of {noise:.0f} m/s in "
+                         f"their difference, more than {tol:.0%} of the speed")
+    else:
+        out["reason"] = (f"no steady front: {early['us']:.0f} m/s over {lo:.0%}-{mid:.0%} of "
+                         f"the bed height, {late['us']:.0f} m/s over {mid:.0%}-{hi:.0%} (they "
+                         f"differ by more than {tol:.0%} and than twice their standard error "
+                         f"{noise:.0f} m/s)")
+    out["steady"] = out["steadiness"] != "unsteady"
+    if not out["steady"]:
+        out["us"] = NAN
+    return out
+
+
+def arrival_time(time, y_f, y_reach):
+    """First time the front height y_f comes down to ``y_reach`` (interpolated); NaN if never."""
+    below = np.flatnonzero(y_f <= y_reach)
+    if below.size == 0:
+        return NAN
+    k = below[0]
+    if k == 0:
+        return float(time[0])
+    y0, y1 = y_f[k - 1], y_f[k]
+    return float(time[k - 1] + (y0 - y_reach) / (y0 - y1) * (time[k] - time[k - 1]))
 
 
 def first_rise(t, comp, frac=0.1):
@@ -141,27 +225,36 @@ def window_mean(t, series, t0, t1):
     return float(np.sum(0.5 * (ss[1:] + ss[:-1]) * np.diff(ts)) / (ts[-1] - ts[0]))
 
 
-def shocked_state(frames, grain_vy, grain_mass, shocked, hammer_y, hammer_vy, y_f, width):
-    """Window means of up (shocked grains' downward velocity), rho1, and the hammer speed."""
+def shocked_state(frames, grain_y, grain_vy, grain_mass, hammer_y, hammer_vy, y_f, width,
+                  behind=0.0):
+    """Window means of up (downward velocity of the grains between the hammer face and
+    ``behind`` above the front, counted by centroid: the compacted state, without the
+    front's own rise), rho1 (their mass over that band's area), and the hammer speed."""
     ups, rhos = [], []
     for k in frames:
-        m = grain_mass[shocked[k]]
-        if m.sum() <= 0 or hammer_y[k] <= y_f[k]:
+        lo = y_f[k] + behind
+        sel = (grain_y[k] > lo) & (grain_y[k] < hammer_y[k])
+        m = grain_mass[sel]
+        if m.sum() <= 0 or hammer_y[k] <= lo:
             continue
-        ups.append(np.sum(m * -grain_vy[k][shocked[k]]) / m.sum())
-        rhos.append(m.sum() / (width * (hammer_y[k] - y_f[k])))
+        ups.append(np.sum(m * -grain_vy[k][sel]) / m.sum())
+        rhos.append(m.sum() / (width * (hammer_y[k] - lo)))
     hs = float(np.mean(-hammer_vy[frames])) if len(frames) else NAN
     return {"up": float(np.mean(ups)) if ups else NAN,
             "rho1": float(np.mean(rhos)) if rhos else NAN, "hammer_speed": hs}
 
 
 def jump_closures(rho0, rho1, us, up, sigma):
-    """Mass and momentum jump-condition closures as fractions (NaN where undefined)."""
+    """Jump-condition closures as fractions (NaN where undefined): mass
+    |rho0 Us - rho1 (Us - up)| / (rho0 Us); the same in strain form |up/Us - (1 - rho0/rho1)|
+    / (1 - rho0/rho1), far more sensitive to up; momentum |sigma - rho0 Us up| / the larger."""
     rho0, rho1, us, up, sigma = (np.float64(v) for v in (rho0, rho1, us, up, sigma))
     with np.errstate(invalid="ignore", divide="ignore"):
         mass = abs(rho0 * us - rho1 * (us - up)) / (rho0 * us)
+        strain = 1.0 - rho0 / rho1
+        mass_strain = abs(up / us - strain) / strain
         mom = abs(sigma - rho0 * us * up) / np.fmax(sigma, rho0 * us * up)
-    return {"mass": float(mass), "momentum": float(mom)}
+    return {"mass": float(mass), "mass_strain": float(mass_strain), "momentum": float(mom)}
 
 
 def snowplow(up, rho0, rho_s):

@@ -87,17 +87,20 @@ def gauges_plot(t, hammer, anvil, path):
     _save(fig, path, (a1, a2))
 
 
-def xt_plot(time, grain_y, y_f, fit, y_top0, hammer_y, anvil_y, path):
-    """x-t diagram: grain centroid heights, the front, its fit, hammer and anvil faces."""
+def xt_plot(time, grain_y, y_f, fit, y_top0, hammer_y, anvil_y, path, y_p=None):
+    """x-t diagram: grain centroid heights, the compaction front and its fit (steady fronts
+    only), the precursor, hammer and anvil faces."""
     fig, ax = plt.subplots(figsize=(6.4, 5.2))
     ax.plot(time * US, grain_y * MM, color="0.6", lw=0.5)
     ax.plot(time * US, hammer_y * MM, "C0", lw=1.5, label="hammer face")
     ax.plot(time * US, anvil_y * MM, "C3", lw=1.5, label="anvil face")
-    ax.plot(time * US, y_f * MM, "k.", ms=3, label="front")
+    if y_p is not None:
+        ax.plot(time * US, y_p * MM, "C1x", ms=3, label="precursor (first motion)")
+    ax.plot(time * US, y_f * MM, "k.", ms=3, label="compaction front")
     # The fitted front line over its window
     if np.isfinite(fit["us"]):
         tw = np.array([fit["t_start"], fit["t_end"]])
-        yw = y_top0 - (fit["us"] * tw + fit["intercept"])
+        yw = y_top0 - fit["us"] * (tw - fit["t0"])
         ax.plot(tw * US, yw * MM, "C2-", lw=2.0, label=f"fit Us = {fit['us']:.0f} m/s")
     ax.set_xlabel("t [us]")
     ax.set_ylabel("y [mm]")
@@ -124,27 +127,56 @@ def hugoniot_plot(ev, stress, path, snow=None, measured=None, decel=None):
     _save(fig, path)
 
 
-def sweep_plot(points, path):
-    """Velocity sweep: Us vs up and stress vs density, ours against the snowplow bound.
+def sweep_plot(points, path, static=None):
+    """The bed's compaction Hugoniot: Us and the precursor speed vs up, and stress vs density,
+    beside the snowplow bound and the crystal's Hugoniot (``crystal_hugoniot`` [c0, s] of
+    the points, when given); ``static``: the static compression curve (density, piston and
+    anvil stresses, snowplow floor). Unsteady points (us None) are drawn hollow at their
+    unfitted speed.
 
-    ``points``: dicts with velocity, us, up, sigma, rho0, rho1, solid_density (SI).
+    ``points``: dicts with velocity, us, us_fit, precursor, up, sigma, rho0, rho1,
+    solid_density (SI).
     """
     def col(key):
         return np.array([np.nan if p.get(key) is None else float(p[key]) for p in points])
 
-    up, us, sig, rho0, rho1, rhos = (col(k) for k in
-                                     ("up", "us", "sigma", "rho0", "rho1", "solid_density"))
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10.0, 4.4))
-    a1.plot(up, us, "C0o", label="DFEM")
-    # Snowplow line at the sweep's mean bed and solid densities
+    up, us, usf, pre, sig, rho0, rho1, rhos = (col(k) for k in (
+        "up", "us", "us_fit", "precursor", "sigma", "rho0", "rho1", "solid_density"))
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11.0, 4.6))
+    steady = np.isfinite(us)
+    a1.plot(up[steady], us[steady], "C0o", label="compaction front (steady)")
+    if (~steady & np.isfinite(usf)).any():
+        a1.plot(up[~steady], usf[~steady], "C0o", mfc="none", label="not steady (unfitted)")
+    a1.plot(up, pre, "C1x", label="precursor (first motion)")
+    # Snowplow line at the sweep's mean bed and solid densities; the crystal's Hugoniot
     r0, rs = np.nanmean(rho0), np.nanmean(rhos)
     ul = np.linspace(0.0, 1.1 * np.nanmax(np.append(up, 1.0)), 50)
     a1.plot(ul, ul / (1.0 - r0 / rs), "r-", label="snowplow Us = up/(1 - rho0/rho_s)")
+    crystal = next((p.get("crystal_hugoniot") for p in points if p.get("crystal_hugoniot")),
+                   None)
+    if crystal:
+        c0, sc = crystal
+        a1.plot(ul, c0 + sc * ul, "k--", lw=1.0, label=f"crystal Us = {c0:.0f} + {sc:g} up")
     a1.set_xlabel("up [m/s]")
     a1.set_ylabel("Us [m/s]")
-    a2.plot(rho1, sig * MPA, "C0o", label="DFEM")
-    a2.plot(rhos, rho0 * up / (1.0 - rho0 / rhos) * up * MPA, "rs",
-            label="snowplow rho0 Us up at rho_s")
-    a2.set_xlabel("density behind the front [kg/m^3]")
+    a2.plot(rho1[steady], sig[steady] * MPA, "C0o", label="shock (steady fronts)")
+    # Snowplow: full density rho_s at the stress rho0 Us up of the snowplow wave
+    a2.plot(np.full(ul.shape, rs), r0 * ul ** 2 / (1.0 - r0 / rs) * MPA, "r-",
+            label="snowplow (rho_s, rho0 up^2/(1 - rho0/rho_s))")
+    if crystal:
+        usc = c0 + sc * ul
+        a2.plot(rs * usc / (usc - ul), rs * usc * ul * MPA, "k--", lw=1.0,
+                label="crystal Hugoniot")
+    if static is not None:
+        a2.plot(static["density"], static["sigma_piston"] * MPA, "C2-", lw=1.0,
+                label="static compression (piston)")
+        a2.plot(static["density"], static["sigma_anvil"] * MPA, "C2:", lw=1.0,
+                label="static compression (anvil)")
+        a2.axhline(static["floor"] * MPA, color="C2", lw=0.5, ls="--",
+                   label="static run's snowplow floor")
+    top = np.nanmax(np.append(sig, 1.0)) * MPA
+    a2.set_ylim(0.0, 1.3 * top)
+    a2.set_xlim(0.9 * r0, 1.15 * rs)
+    a2.set_xlabel("density [kg/m^3]")
     a2.set_ylabel("stress [MPa] (compression > 0)")
     _save(fig, path, (a1, a2))

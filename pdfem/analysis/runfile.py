@@ -16,8 +16,9 @@ import numpy as np
 from pdfem.errors import InputError
 
 # Values of the [shock] keys when an older resolved scene lacks them
-SHOCK_DEFAULTS = {"front_fraction": 0.5, "plots": "png", "reference_us": 500.0,
-                  "reference_arrival": 8.0e-6, "reference_density": 1240.0}
+SHOCK_DEFAULTS = {"front_fraction": 0.5, "precursor_fraction": 0.05, "steady_tolerance": 0.1,
+                  "plots": "png", "reference_us": 500.0, "reference_arrival": 8.0e-6,
+                  "reference_density": 1240.0}
 
 
 def element_areas(x, conn):
@@ -64,11 +65,13 @@ class Run:
     hammer_y: np.ndarray
     hammer_vy: np.ndarray
     anvil_y: np.ndarray
+    grain_top: np.ndarray
     hammer_mean_vy: np.ndarray
     hammer_mass: float
     grain_top0: float
     gauge_time: np.ndarray
     gauges: dict
+    drive: dict
     energy: dict
     has_stress: bool
     has_temperature: bool
@@ -105,11 +108,11 @@ def _block_rows(scene, ng, node_body, name, path):
 
 
 def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall):
-    """Per frame: grain centroid y and v_y, hammer face y and v_y, anvil face y, and the
-    whole hammer's mass-weighted mean y and v_y."""
+    """Per frame: grain centroid y and v_y, hammer face y and v_y, anvil face y, the
+    whole hammer's mass-weighted mean y and v_y, and the highest grain node."""
     nf = fr["time"].shape[0]
     gy, gvy = np.zeros((nf, ng)), np.zeros((nf, ng))
-    hy, hvy, ay, my, mvy = (np.zeros(nf) for _ in range(5))
+    hy, hvy, ay, my, mvy, top = (np.zeros(nf) for _ in range(6))
     wh = node_mass[hall] / node_mass[hall].sum()
     gmask = node_body < ng
     nb_g, w = node_body[gmask], node_mass[gmask]
@@ -118,6 +121,7 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall):
     for k in range(nf):
         x = fr["x"][k]
         gy[k] = body_means(x[gmask, 1], w, nb_g, ng)
+        top[k] = x[gmask, 1].max()
         hy[k], ay[k], my[k] = x[hammer, 1].mean(), x[anvil, 1].mean(), wh @ x[hall, 1]
         if has_v:
             v = fr["v"][k]
@@ -127,7 +131,16 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall):
     # Without stored velocities, difference the positions
     if not has_v and nf > 1:
         gvy, hvy, mvy = np.gradient(gy, t, axis=0), np.gradient(hy, t), np.gradient(my, t)
-    return t, gy, gvy, hy, hvy, ay, mvy
+    return t, gy, gvy, hy, hvy, ay, mvy, top
+
+
+def _drive(scene, hammer):
+    """The hammer's velocity condition, if any: driven (bool), release and ramp_down [s]."""
+    for bc in scene.get("bc", []):
+        if bc.get("body") == hammer and bc.get("type") == "velocity":
+            return {"driven": True, "release": float(bc.get("release", np.inf)),
+                    "ramp_down": float(bc.get("ramp_down", 0.0))}
+    return {"driven": False, "release": np.inf, "ramp_down": 0.0}
 
 
 def read_run(path):
@@ -176,10 +189,11 @@ def _read(f, path, scene, shock):
     shock.setdefault("solid_density", float(scene["materials"][gmat]["density"]))
     hammer, _, hall = _block_rows(scene, ng, node_body, shock["hammer"], path)
     _, anvil, _ = _block_rows(scene, ng, node_body, shock["anvil"], path)
-    t, gy, gvy, hy, hvy, ay, mvy = _reduce_frames(f["frames"], node_mass, node_body, ng,
-                                                  hammer, anvil, hall)
+    t, gy, gvy, hy, hvy, ay, mvy, top = _reduce_frames(f["frames"], node_mass, node_body, ng,
+                                                       hammer, anvil, hall)
     # Gauge series: every group under /gauges but the time axis
-    gauges = {n: {"velocity": g["velocity"][:], "stress": g["stress"][:]}
+    gauges = {n: {"velocity": g["velocity"][:], "stress": g["stress"][:],
+                  "force": g["force"][:] if "force" in g else None}
               for n, g in f["gauges"].items() if n != "time"}
     for key in ("hammer_gauge", "anvil_gauge"):
         if shock[key] not in gauges:
@@ -191,8 +205,9 @@ def _read(f, path, scene, shock):
                node_body=node_body, elem_body=elem_body, ng=ng, elem_mass=elem_mass,
                grain_mass=grain_mass, grain_diam=np.sqrt(4.0 * garea / np.pi),
                grain_material=gmat, hammer_nodes=hammer, anvil_nodes=anvil, time=t,
-               grain_y=gy, grain_vy=gvy, hammer_y=hy, hammer_vy=hvy, anvil_y=ay,
+               grain_y=gy, grain_vy=gvy, hammer_y=hy, hammer_vy=hvy, anvil_y=ay, grain_top=top,
                hammer_mean_vy=mvy, hammer_mass=float(node_mass[hall].sum()),
                grain_top0=float(x0[node_body < ng, 1].max()), gauge_time=f["gauges/time"][:],
-               gauges=gauges, energy=energy, has_stress="stress" in f["frames"],
+               gauges=gauges, drive=_drive(scene, shock["hammer"]), energy=energy,
+               has_stress="stress" in f["frames"],
                has_temperature="temperature" in f["frames"], notes=notes)

@@ -25,7 +25,7 @@ def run(args):
     check_output_path(out, args.force, "prepare.output")
     out = os.path.abspath(out)
     from pdfem.parallel.mpi import world
-    from pdfem.prepare.phases import prepare
+    from pdfem.prepare import prepare
 
     comm = world()
     if comm.rank == 0:

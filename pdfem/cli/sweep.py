@@ -1,5 +1,12 @@
-"""``pdfem sweep scene.toml --velocities 100,200,...``: the shock scene at several hammer
-speeds; Us-up and stress-density points beside the snowplow bound (report fig. 13 style)."""
+"""``pdfem sweep [scene.toml] --velocities 100,200,...``: the bed's compaction Hugoniot.
+
+The shock scene's hammer is driven as a piston at each speed for the snowplow transit time
+(:mod:`pdfem.study.hugoniot`); each run is analysed (steady fronts only are fitted). Writes
+the runs ``<prefix>-v<speed>.h5`` with their summaries, ``<prefix>.json`` (one row per speed)
+and ``<prefix>.png``: Us-up with the precursor, the snowplow bound and the crystal's Hugoniot;
+stress-density with the same and, with ``--static``, the bed's static compression curve
+(``<prefix>-static.h5``).
+"""
 
 import json
 import math
@@ -8,16 +15,20 @@ import tomllib
 
 from pdfem.errors import InputError
 
+DEFAULT_SPEEDS = "100,200,288,400,500,700,1000"
+
 
 def add_parser(sub):
-    p = sub.add_parser("sweep", help="run a shock scene at several hammer velocities: Us-up "
-                       "and stress-density points with the snowplow bound")
+    p = sub.add_parser("sweep", help="the bed's compaction Hugoniot: a piston at several "
+                       "speeds (Us-up, stress-density, snowplow bound, crystal Hugoniot)")
     p.add_argument("scene", nargs="?", default=None, help="scene with a [shock] table "
                    "(default: the packaged shot912.toml)")
-    p.add_argument("--velocities", default="100,200,288,400,500",
-                   help="hammer speeds [m/s], comma separated (default 100,200,288,400,500)")
+    p.add_argument("--velocities", default=DEFAULT_SPEEDS,
+                   help=f"piston speeds [m/s], comma separated (default {DEFAULT_SPEEDS})")
+    p.add_argument("--static", action="store_true", help="also compress the bed "
+                   "quasi-statically and draw its stress-density curve beside the Hugoniot")
     p.add_argument("-p", "--prefix", default="sweep", help="prefix of the run files, "
-                   "sweep.json and sweep.png (default: sweep)")
+                   "<prefix>.json and <prefix>.png (default: sweep)")
     p.add_argument("--force", action="store_true", help="overwrite existing run files")
 
 
@@ -32,22 +43,60 @@ def _speeds(text):
     return vals
 
 
+def _point(v, s, summary):
+    """One row of the sweep from a run's analysis summary."""
+    f, p, h, j, b = s["front"], s["precursor"], s["shocked"], s["jump"], s["bed"]
+    return {"velocity": v, "us": f["us"], "us_se": f["se"], "us_fit": f["us_fit"],
+            "steady": f["steady"], "steadiness": f["steadiness"], "note": f["note"],
+            "precursor": p["us"],
+            "precursor_fit": p["us_fit"], "up": h["up"], "sigma": h["sigma"],
+            "sigma_source": h["sigma_source"], "sigma_bed": h["sigma_bed"],
+            "rho0": b["rho0"], "rho1": h["rho1"], "solid_density": b["solid_density"],
+            "snowplow_us": s["snowplow"]["us"], "snowplow_sigma": s["snowplow"]["sigma"],
+            "mass_closure": j["mass_closure"], "mass_strain_closure": j["mass_strain_closure"],
+            "momentum_closure": j["momentum_closure"],
+            "crystal_hugoniot": s["hugoniot"]["crystal"],
+            "balance_error": summary["balance_error"], "wall_s": summary["wall_s"]}
+
+
+def _f(v, scale=1.0):
+    """A number for the log line, or n/a."""
+    return "n/a" if v is None or v != v else f"{v * scale:.1f}"
+
+
 def run(args):
     from pdfem.cli.run import check_output_path, default_scene_path, run_outputs
     from pdfem.scene import check_ranks, load_scene, parse_scene
+    from pdfem.study import hugoniot as hg
 
     # The input first (a bad one is reported before MPI and the solver load)
     speeds = _speeds(args.velocities)
     path = args.scene or default_scene_path()
     scene = load_scene(path)
-    if "shock" not in scene.resolved:
-        raise InputError(f"{path}: shock: sweep needs a scene with a [shock] table")
-    hammer = scene.resolved["shock"]["hammer"]
+    hg.check_scene(scene, path)
+    sh = scene.resolved["shock"]
+    H0, phi0, width = hg.bed_figures(scene)
     outs = [f"{args.prefix}-v{v:g}.h5" for v in speeds]
-    # The runs (plots off: summaries only) and the sweep's own JSON and figure
     files = [f for o in outs for f in run_outputs(o, scene, plots="none")]
-    for out in files + [args.prefix + ".json", args.prefix + ".png"]:
+    extra = [args.prefix + s for s in (".json", ".png")]
+    if args.static:
+        extra += [f for f in run_outputs(args.prefix + "-static.h5", scene, plots="none")
+                  if "summary" not in f]
+    for out in files + extra:
         check_output_path(out, args.force, "--prefix")
+    with open(path, "rb") as fh:
+        doc = tomllib.load(fh)
+    mat = hg.grain_material(scene.resolved)
+    rho_s = sh["solid_density"]
+    slowest = [hg.slowest_front(v, phi0 * rho_s, rho_s, mat["bulk"], mat.get("W", 0.0))
+               for v in speeds]
+    for v, us in zip(speeds, slowest, strict=True):
+        if not us > 0:
+            raise InputError(f"--velocities: at {v:g} m/s the wave's stress would crush the "
+                             "grains past any density this bed can hold")
+    docs = [parse_scene(hg.shock_doc(doc, sh["hammer"], v, H0, us), scene.base_dir,
+                        name=f"{path} (piston at {v:g} m/s)")
+            for v, us in zip(speeds, slowest, strict=True)]
     from pdfem.analysis import analyse
     from pdfem.analysis.plots import sweep_plot
     from pdfem.driver import run as drive
@@ -56,48 +105,85 @@ def run(args):
 
     comm = world()
     check_ranks(scene, comm.size)
-    with open(path, "rb") as fh:
-        doc = tomllib.load(fh)
     points = []
-    for v, out in zip(speeds, outs, strict=True):
-        # The scene with the hammer's initial velocity replaced
-        for blk in doc["blocks"]:
-            if blk["name"] == hammer:
-                blk["velocity"] = [0.0, -v]
-        doc.setdefault("shock", {})["plots"] = "none"
-        sc = parse_scene(doc, scene.base_dir, name=f"{path} (hammer at {v:g} m/s)")
+    for v, sc, out in zip(speeds, docs, outs, strict=True):
         if comm.rank == 0:
-            print(f"pdfem sweep: hammer at {v:g} m/s -> {out}", flush=True)
+            print(f"pdfem sweep: piston at {v:g} m/s for {sc.resolved['time']['end'] * 1e6:.2f}"
+                  f" us -> {out}", flush=True)
         summary = drive(Simulation(sc, comm), out, quiet=True)
         if comm.rank == 0:
             s = analyse(out, os.path.splitext(out)[0])
-            points.append({"velocity": v, "us": s["front"]["us"], "up": s["shocked"]["up"],
-                           "sigma": s["shocked"]["sigma_hammer_deceleration"],
-                           "sigma_bed": s["shocked"]["sigma_bed"],
-                           "sigma_gauge": s["shocked"]["sigma"], "rho0": s["bed"]["rho0"],
-                           "rho1": s["shocked"]["rho1"],
-                           "solid_density": s["bed"]["solid_density"],
-                           "snowplow_us": s["snowplow"]["us"],
-                           "snowplow_sigma": s["snowplow"]["sigma"],
-                           "mass_closure": s["jump"]["mass_closure"],
-                           "momentum_closure": s["jump"]["momentum_closure_deceleration"],
-                           "balance_error": summary["balance_error"], "wall_s": summary["wall_s"]})
+            points.append(_point(v, s, summary))
+            points[-1]["slowest_us"] = hg.slowest_front(s["shocked"]["up"], s["bed"]["rho0"],
+                                                        rho_s, mat["bulk"], mat.get("W", 0.0))
             p = points[-1]
-            print(f"  Us {_f(p['us'])} m/s, up {_f(p['up'])} m/s, stress (hammer deceleration) "
-                  f"{_f(p['sigma'], 1e-6)} MPa, behind the front {_f(p['sigma_bed'], 1e-6)} MPa; "
-                  f"snowplow Us {_f(p['snowplow_us'])} m/s", flush=True)
+            print(f"  Us {_f(p['us'])} m/s" + (f" ({p['note']})" if p["note"] else "")
+                  + f", precursor {_f(p['precursor'])} m/s, up {_f(p['up'])} m/s, rho1 "
+                  f"{_f(p['rho1'])} kg/m3, stress {_f(p['sigma'], 1e-6)} MPa; snowplow Us "
+                  f"{_f(p['snowplow_us'])} m/s", flush=True)
+    static = _static(args, scene, doc, sh, H0, phi0, width, comm) if args.static else None
     if comm.rank == 0:
         from pdfem.analysis.summary import _plain
 
+        checks = _checks(points)
+        for line in checks:
+            print(f"pdfem sweep: {line}", flush=True)
+        body = {"points": points, "checks": checks,
+                "static": None if static is None else {k: v for k, v in static.items()}}
         with open(args.prefix + ".json.part", "w") as fh:
-            json.dump(_plain(points), fh, indent=1)
+            json.dump(_plain(body), fh, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
-        sweep_plot(points, args.prefix + ".png")
+        sweep_plot(points, args.prefix + ".png", static=static)
         print(f"pdfem sweep: {args.prefix}.json, {args.prefix}.png", flush=True)
     comm.Barrier()
     return 0
 
 
-def _f(v, scale=1.0):
-    """A number for the log line, or n/a."""
-    return "n/a" if v is None or v != v else f"{v * scale:.1f}"
+def _static(args, scene, doc, sh, H0, phi0, width, comm):
+    """The static compression run and its curve (rank 0)."""
+    from pdfem.driver import run as drive
+    from pdfem.scene import parse_scene
+    from pdfem.solver import Simulation
+    from pdfem.study import hugoniot as hg
+
+    d, floor = hg.static_doc(doc, sh["hammer"], H0, phi0)
+    sc = parse_scene(d, scene.base_dir, name=f"{scene.path} (static compression)")
+    out = args.prefix + "-static.h5"
+    if comm.rank == 0:
+        print(f"pdfem sweep: static compression (densities x {hg.STATIC_SCALE:g}, piston at "
+              f"{hg.STATIC_SPEED:g} m/s, snowplow floor {floor * 1e-6:.2f} MPa) -> {out}",
+              flush=True)
+    summary = drive(Simulation(sc, comm), out, quiet=True)
+    if comm.rank != 0:
+        return None
+    rho_s = sh["solid_density"]
+    c = hg.static_curve(out, sh["hammer_gauge"], sh["anvil_gauge"], H0, phi0 * rho_s, width,
+                        hg.STATIC_SPEED)
+    c.update(floor=floor, wall_s=summary["wall_s"], scale=hg.STATIC_SCALE,
+             speed=hg.STATIC_SPEED)
+    print(f"  largest kinetic energy / piston work {c['kinetic_over_work']:.3g}; "
+          f"{summary['wall_s']:.0f} s", flush=True)
+    return c
+
+
+def _checks(points):
+    """Lines on the Hugoniot's shape: fronts fitted, monotone Us(up) and stress(density),
+    every front at or above its snowplow bound."""
+    ok = [p for p in points if p["us"] is not None and p["us"] == p["us"]]
+    lines = [f"{len(ok)} of {len(points)} speeds have a steady front"]
+    ok.sort(key=lambda p: p["up"])
+    us_up = all(b["us"] > a["us"] for a, b in zip(ok, ok[1:]))
+    sig_rho = all(b["sigma"] > a["sigma"] and b["rho1"] > a["rho1"] for a, b in zip(ok, ok[1:]))
+    lines.append(f"Us rises with up: {'yes' if us_up else 'no'}; stress rises with density: "
+                 f"{'yes' if sig_rho else 'no'}")
+    below = [p for p in ok if not p["us"] >= p["snowplow_us"]]
+    lines.append("every steady front at or above its snowplow bound" if not below else
+                 "below the snowplow bound (rigid grains): " + ", ".join(
+                     f"{p['velocity']:g} m/s (Us {p['us']:.0f} < {p['snowplow_us']:.0f})"
+                     for p in below))
+    under = [p for p in ok if not p["us"] >= p["slowest_us"]]
+    if below:
+        lines.append("every steady front at or above the bound of grains compressed by their "
+                     "bulk modulus" if not under else "below even the compressed-grain bound: "
+                     + ", ".join(f"{p['velocity']:g} m/s" for p in under))
+    return lines

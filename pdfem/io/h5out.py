@@ -7,6 +7,7 @@ Layout (everything by global id, so 1-rank and N-rank files compare equal):
     /frames/temperature (F,NN) (only with [heat])
     /energy/time (E,) and one (E,) dataset per term, plus /energy/balance_error
     /gauges/time (G,), /gauges/NAME/velocity (G,2), /gauges/NAME/stress (G,4),
+    /gauges/NAME/force (G,2) (contact force on the gauge elements' nodes, N/m),
     /gauges/NAME/elements (the gauge's element ids; attribute body) (with [[gauges]])
     attributes: scene (resolved TOML), effects, pdfem version
 The file is written as ``<path>.part`` and renamed to ``<path>`` only when complete.
@@ -212,7 +213,8 @@ class RunWriter:
         comm.Barrier()
 
     def _write_gauges(self, gauges):
-        """/gauges/time and per gauge velocity (G, 2) and stress (G, 4) (collective)."""
+        """/gauges/time and per gauge velocity (G, 2), stress (G, 4) and contact force (G, 2)
+        (collective)."""
         comm = self.comm
         hist = gauges.history() if comm.rank == 0 else None
         n = comm.bcast(hist[0].shape[0] if hist else None, root=0)
@@ -222,7 +224,8 @@ class RunWriter:
         for name in gauges.names:
             sub = g.create_group(name)
             ds.append((sub.create_dataset("velocity", (n, 2), "f8"),
-                       sub.create_dataset("stress", (n, 4), "f8")))
+                       sub.create_dataset("stress", (n, 4), "f8"),
+                       sub.create_dataset("force", (n, 2), "f8")))
         # The element ids as a dataset: an attribute holds at most 64 KiB (8192 elements)
         elem_ds = []
         for (gid, elems), name in zip(gauges.sets, gauges.names, strict=True):
@@ -234,6 +237,7 @@ class RunWriter:
                     d[:] = elems
         if comm.rank == 0 and n:
             t[:] = hist[0]
-            for i, (dv, dsig) in enumerate(ds):
+            for i, (dv, dsig, dfor) in enumerate(ds):
                 dv[:] = hist[1][:, i, :2]
-                dsig[:] = hist[1][:, i, 2:]
+                dsig[:] = hist[1][:, i, 2:6]
+                dfor[:] = hist[1][:, i, 6:]

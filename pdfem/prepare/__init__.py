@@ -1,1 +1,29 @@
-"""Sample preparation: raining grains into a chamber, dropping a weight, relaxing."""
+"""Sample preparation: a bed of grains for an impact scene, rained (the report's route) or
+placed geometrically at a target packing. :func:`prepare` runs the scene's method."""
+
+import os
+
+from pdfem.errors import InputError
+
+
+def _log(line):
+    """Progress lines, flushed (a job log is a file)."""
+    print(line, flush=True)
+
+
+def prepare(path, out, comm, log=_log):
+    """Prepare the bed of the preparation scene at ``path`` (its ``prepare.method``) and write
+    it to ``out``; returns the bed file's attributes on rank 0 (None elsewhere)."""
+    from pdfem.scene import load_scene
+
+    scene = load_scene(path)
+    if "prepare" not in scene.resolved:
+        raise InputError(f"{path}: prepare: the scene has no [prepare] table")
+    out = os.path.abspath(out)
+    if scene.resolved["prepare"]["method"] == "geometric":
+        from pdfem.prepare.geometric_bed import prepare_geometric
+
+        return prepare_geometric(path, scene, out, comm, log)
+    from pdfem.prepare.phases import prepare_rain
+
+    return prepare_rain(path, scene, out, comm, log)

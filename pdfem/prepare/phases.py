@@ -1,6 +1,7 @@
-"""``pdfem prepare``: rain grains into the chamber, drop a weight on them, relax; save the bed.
+"""The rain route of ``pdfem prepare``: rain grains into the chamber, drop a weight on them,
+relax, settle; save the bed.
 
-Three phases, each a full Simulation of a scene derived from the preparation scene:
+Four phases, each a full Simulation of a scene derived from the preparation scene:
 
 1. rain: the grains of :func:`pdfem.prepare.rain.rain_grains` fall under the amplified gravity
    ``prepare.gravity`` with damping ``prepare.damping``; moduli are scaled by
@@ -35,10 +36,10 @@ import numpy as np
 
 from pdfem.energy import global_terms
 from pdfem.errors import InputError
-from pdfem.mesh.ellipse import ellipse_mesh
+from pdfem.prepare import packing
 from pdfem.prepare.bedfile import write_bed
 from pdfem.prepare.rain import rain_grains
-from pdfem.scene import check_ranks, load_scene, parse_scene
+from pdfem.scene import check_ranks, parse_scene
 from pdfem.scene.schema import HEAT_EFFECTS
 from pdfem.solver import Simulation
 
@@ -158,25 +159,11 @@ def _run_phase(name, scene, comm, threshold, log, max_steps):
     return sim, fig
 
 
-def _ellipse_areas(nodes, level):
-    """Area of each grain mesh (shoelace over its quads)."""
-    _, conn, _ = ellipse_mesh(1.0, 1.0, level)
-    xe = nodes[:, conn, :]
-    return 0.5 * ((xe[..., 2, 0] - xe[..., 0, 0]) * (xe[..., 3, 1] - xe[..., 1, 1])
-                  - (xe[..., 3, 0] - xe[..., 1, 0]) * (xe[..., 2, 1] - xe[..., 0, 1])).sum(axis=1)
-
-
-def _log(line):
-    """Progress lines, flushed (a job log is a file)."""
-    print(line, flush=True)
-
-
-def prepare(path, out, comm, log=_log):
-    """Run the three phases of the preparation scene at ``path``; write the bed to ``out``."""
-    scene = load_scene(path)
+def prepare_rain(path, scene, out, comm, log):
+    """Run the four phases of the preparation scene at ``path``; write the bed to ``out``;
+    return its attributes on rank 0. With ``prepare.packing`` the packing reached must be
+    within the tolerances of it, else InputError (and no bed file)."""
     r = scene.resolved
-    if "prepare" not in r:
-        raise InputError(f"{path}: prepare: the scene has no [prepare] table")
     pr = r["prepare"]
     base = _base_doc(path, scene)
     box = r["domain"]["box"]
@@ -189,7 +176,6 @@ def prepare(path, out, comm, log=_log):
     mass = rho * math.pi * float(np.sum(rows[:, 2] * rows[:, 3]))
     threshold = pr["ke_fraction"] * mass * pr["gravity"] * (box[3] - box[1])
     level = r["element"]["level"]
-    out = os.path.abspath(out)
     phases = ("rain", "weight", "relax", "settle")
     figs, tmp = {}, [f"{out}.{p}.h5" for p in phases[:-1]]
     try:
@@ -210,14 +196,16 @@ def prepare(path, out, comm, log=_log):
             sim, figs[phase] = _run_phase(phase, sc, comm, threshold, log, limit)
             state = _gather_grains(sim)
             bed, grains = (tmp[k] if k < len(tmp) else out), None
+            err = None
             if comm.rank == 0:
                 attrs = {"level": level, "phase": phase}
                 if phase == "settle":
-                    attrs.update(_bed_figures(state[1], level, box, floor, rho, sim, figs, pr))
-                    press = -(state[3][..., 0] + state[3][..., 1] + state[3][..., 3]) / 3.0
-                    attrs["residual_pressure_mean"] = float(press.mean())
-                    attrs["residual_stress_max"] = float(np.abs(state[3]).max())
-                    attrs["scene"] = scene.to_toml_string()
+                    fig, err = _bed_figures(state, level, box, floor, rho, figs, pr, log)
+                    attrs.update(fig, scene=scene.to_toml_string())
+            err = comm.bcast(err, root=0)
+            if err:
+                raise InputError(err)
+            if comm.rank == 0:
                 ell = np.concatenate([state[1].mean(axis=1), rows[:, 2:]], axis=1)
                 # The last phase's stresses and material state travel with the bed
                 last = phase == "settle"
@@ -232,19 +220,27 @@ def prepare(path, out, comm, log=_log):
     return _report(out, figs, comm, log)
 
 
-def _bed_figures(nodes, level, box, floor, rho, sim, figs, pr):
-    """Packing fraction, bed height and density; phase figures as attributes."""
-    area = _ellipse_areas(nodes, level)
-    width = box[2] - box[0]
-    top = float(nodes[:, :, 1].max())
-    phi = float(area.sum()) / (width * (top - floor))
-    out = {"packing_fraction": phi, "bed_bottom": floor, "bed_top": top, "width": width,
-           "grain_mass": rho * float(area.sum()), "bed_density": rho * phi,
-           "seed": pr["seed"], "converged": all(f["converged"] for f in figs.values())}
+def _bed_figures(state, level, box, floor, rho, figs, pr, log):
+    """Attributes of the settled bed (packing between the floor and the highest grain node,
+    residual stresses, phase figures) and the packing check's complaint (None: fine)."""
+    nodes, stress = state[1], state[3]
+    prof = packing.profile(packing.outlines(nodes, level), box[0], box[2], floor,
+                           float(nodes[:, :, 1].max()))
+    target = pr.get("packing")
+    for line in packing.report(prof, target):
+        log(f"prepare: {line}")
+    press = -(stress[..., 0] + stress[..., 1] + stress[..., 3]) / 3.0
+    out = {"method": "rain", **packing.attributes(prof, target, rho), "seed": pr["seed"],
+           "converged": all(f["converged"] for f in figs.values()),
+           "residual_pressure_mean": float(press.mean()),
+           "residual_stress_max": float(np.abs(stress).max())}
     for name, f in figs.items():
         for key, val in f.items():
             out[f"{name}_{key}"] = val
-    return out
+    err = packing.check(prof, target, pr["tolerance"], pr["slice_tolerance"],
+                        "prepare.packing")
+    return out, (err + " (the rain route packs densely; method = \"geometric\" reaches a "
+                 "chosen packing)" if err else None)
 
 
 def _report(out, figs, comm, log):
@@ -255,11 +251,9 @@ def _report(out, figs, comm, log):
 
     with h5py.File(out, "r") as f:
         a = dict(f.attrs)
-    log(f"prepare: bed {out}: packing fraction {a['packing_fraction']:.4f}, height "
-        f"{a['bed_top'] - a['bed_bottom']:.4e} m, bed density {a['bed_density']:.1f} kg/m^3 "
-        f"(grain density x packing); for a bed of 1240 kg/m^3 (shot 912) the grain density "
-        f"would be {1240.0 / a['packing_fraction']:.1f} kg/m^3; residual grain pressure "
-        f"{a['residual_pressure_mean']:.3e} Pa mean, largest stress component "
-        f"{a['residual_stress_max']:.3e} Pa; wall time "
+    log(f"prepare: bed {out}: height {a['bed_top'] - a['bed_bottom']:.4e} m, bed density "
+        f"{a['bed_density']:.1f} kg/m^3 (grain density x packing {a['packing_whole']:.4f}); "
+        f"residual grain pressure {a['residual_pressure_mean']:.3e} Pa mean, largest stress "
+        f"component {a['residual_stress_max']:.3e} Pa; wall time "
         f"{sum(f['wall_s'] for f in figs.values()):.1f} s")
     return a

@@ -119,9 +119,18 @@ def _check_sizes(r, name):
         if not b["nx"] * b["ny"] <= MAX_BLOCK_ELEMENTS:
             raise InputError(f"{name}: blocks[{i}].nx: {b['nx']} x {b['ny']} elements, more "
                              f"than {MAX_BLOCK_ELEMENTS:.0e}")
-    if "prepare" in r and r["prepare"]["grains"] > MAX_GRAINS:
+    pr = r.get("prepare", {})
+    if pr.get("grains", 0) > MAX_GRAINS:
         raise InputError(f"{name}: prepare.grains: must be <= {MAX_GRAINS:.0e} (got "
-                         f"{r['prepare']['grains']})")
+                         f"{pr['grains']})")
+    if "height" in pr:
+        # The most grains a geometric bed of this size can hold (smallest grains)
+        x0, _, x1, _ = r["domain"]["box"]
+        small = math.pi * pr["semi_axis"][0] ** 2 * pr["aspect"][0]
+        most = pr["packing"] * (x1 - x0) * pr["height"] / small
+        if not most <= MAX_GRAINS:
+            raise InputError(f"{name}: prepare.height: a bed this size could hold {most:.3g} "
+                             f"grains, more than {MAX_GRAINS:.0e}")
 
 
 def _check_speeds(r, grains, label, name):

@@ -152,6 +152,12 @@ BC = {
                "constrained components", choices=("x", "y", "xy")),
     "velocity": Key("vec2", OPTIONAL, "prescribed velocity [vx, vy]; required for (and only "
                     "for) type velocity", "m/s"),
+    "release": _pos("float", OPTIONAL, "type velocity on a body: the condition holds until "
+                    "this time, then lets the nodes go (the body moves freely on); default: "
+                    "held to the end", "s"),
+    "ramp_down": _nonneg("float", 0.0, "with release: the prescribed velocity falls linearly "
+                         "to zero over this time before the release (a driven piston brought "
+                         "to rest, then freed); at most release", "s"),
 }
 
 # [walls]
@@ -227,9 +233,18 @@ SHOCK = {
     "anvil_gauge": Key("str", REQUIRED, "gauge at the anvil face"),
     "solid_density": _pos("float", Derived("density of the first grain material"),
                           "grain (crystal) density of the snowplow bound", "kg/m^3"),
-    "front_fraction": Key("float", 0.5, "a grain is behind the front once its downward "
-                          "velocity exceeds this fraction of the hammer's", lo=0.0, hi=1.0,
-                          lo_open=True, hi_open=True),
+    "front_fraction": Key("float", 0.5, "the compaction front: the deepest layer of grains "
+                          "(contiguous with the hammer) moving down faster than this fraction "
+                          "of the hammer face's speed", lo=0.0, hi=1.0, lo_open=True,
+                          hi_open=True),
+    "precursor_fraction": Key("float", 0.05, "the precursor (first motion): the same with this "
+                              "fraction; below front_fraction", lo=0.0, hi=1.0, lo_open=True,
+                              hi_open=True),
+    "steady_tolerance": _pos("float", 0.1, "a front is steady when its speeds over 15-50 % and "
+                             "50-85 % of the bed height differ by at most this fraction of the "
+                             "speed over 15-85 %; an unsteady front is reported, not fitted"),
+    "crystal_hugoniot": Key("vec2", OPTIONAL, "[c0, s] of the grain crystal's Hugoniot Us = c0 "
+                            "+ s up, drawn beside the bed's (sweep)", "[m/s, 1]"),
     "plots": Key("str", "png", "write the figures (PNG, matplotlib) or not",
                  choices=("png", "none")),
     "reference_us": _pos("float", 500.0, "front speed reported by the 1997 study (printed "
@@ -245,29 +260,48 @@ SHOCK = {
 
 # [prepare]
 PREPARE = {
-    "grains": Key("int", REQUIRED, "number of grains rained into the chamber", lo=1),
+    "method": Key("str", "rain", "how the bed is made: rain (the report's raining, dropped "
+                  "weight, relaxation and settling: a static equilibrium, dense) or geometric "
+                  "(grains placed at random and grown to `packing`, disjoint, at rest, not in "
+                  "equilibrium under gravity)", choices=("rain", "geometric")),
+    "packing": Key("float", OPTIONAL, "target packing: area fraction of the meshed grains in "
+                   "the bed's interior (one mean grain diameter from the bottom and the top); "
+                   "required by geometric; with rain the reached packing is checked against "
+                   "it", lo=0.0, hi=1.0, lo_open=True, hi_open=True),
+    "tolerance": _pos("float", 0.01, "largest admissible |reached - packing| of the interior"),
+    "slice_tolerance": _pos("float", 0.03, "largest admissible |slice - packing| of the "
+                            "interior slices (one mean grain diameter thick)"),
+    "height": _pos("float", OPTIONAL, "geometric: bed height; the grains fill the box from "
+                   "the floor (the highest block top or the domain bottom) to floor + height",
+                   "m"),
+    "sweeps": _nonneg("int", 200, "geometric: Monte Carlo sweeps at full size after the "
+                      "growth, with a penalty on the slices' departure from `packing`"),
+    "grains": Key("int", OPTIONAL, "rain: number of grains rained into the chamber "
+                  "(required)", lo=1),
     "seed": _nonneg("int", 0, "seed of the random sizes, shapes, angles and positions"),
     "semi_axis": _pos("vec2", REQUIRED, "range [min, max] of the semi-major axis a", "m"),
     "aspect": _pos("vec2", [0.6, 1.0], "range [min, max] of b/a (<= 1)", hi=1.0),
     "material": Key("str", REQUIRED, "grain material (the impact scene's)"),
-    "gravity": _pos("float", 2.0e4, "amplified gravity while raining and compacting", "m/s^2"),
-    "damping": _nonneg("float", 2.0e5, "mass-proportional damping while packing", "1/s"),
-    "stiffness_scale": Key("float", 0.01, "factor on the moduli while raining and "
+    "gravity": _pos("float", 2.0e4, "rain: amplified gravity while raining and compacting",
+                    "m/s^2"),
+    "damping": _nonneg("float", 2.0e5, "rain: mass-proportional damping while packing", "1/s"),
+    "stiffness_scale": Key("float", 0.01, "rain: factor on the moduli while raining and "
                            "compacting (longer stable steps)", lo=0.0, hi=1.0,
                            lo_open=True),
-    "contact_scale": Key("float", 1.0e-3, "factor on contact kn0 and ks while raining and "
-                         "compacting", lo=0.0, hi=1.0, lo_open=True),
-    "mass_scale": Key("float", 1.0e4, "factor on every density in the last (settle) phase, "
-                      "which runs with the scene's own stiffness", lo=1.0),
-    "weight": Key("str", REQUIRED, "block dropped on the bed after the rain (its box is moved "
-                  "to rest just above the highest grain plus drop_gap)"),
-    "drop_gap": _nonneg("float", 0.0, "gap between the bed top and the weight when it is "
-                        "released", "m"),
-    "drop_velocity": _nonneg("float", 0.0, "downward speed of the weight when released", "m/s"),
-    "ke_fraction": Key("float", 1.0e-4, "a phase ends when the kinetic energy is below this "
-                       "fraction of M g_amplified H (grains' mass, chamber height)", lo=0.0,
-                       hi=1.0, lo_open=True, hi_open=True),
-    "phase_time": _pos("float", 2.0e-3, "longest simulated time of each phase", "s"),
+    "contact_scale": Key("float", 1.0e-3, "rain: factor on contact kn0 and ks while raining "
+                         "and compacting", lo=0.0, hi=1.0, lo_open=True),
+    "mass_scale": Key("float", 1.0e4, "rain: factor on every density in the last (settle) "
+                      "phase, which runs with the scene's own stiffness", lo=1.0),
+    "weight": Key("str", OPTIONAL, "rain: block dropped on the bed after the rain (required; "
+                  "its box is moved to rest just above the highest grain plus drop_gap)"),
+    "drop_gap": _nonneg("float", 0.0, "rain: gap between the bed top and the weight when it "
+                        "is released", "m"),
+    "drop_velocity": _nonneg("float", 0.0, "rain: downward speed of the weight when released",
+                             "m/s"),
+    "ke_fraction": Key("float", 1.0e-4, "rain: a phase ends when the kinetic energy is below "
+                       "this fraction of M g_amplified H (grains' mass, chamber height)",
+                       lo=0.0, hi=1.0, lo_open=True, hi_open=True),
+    "phase_time": _pos("float", 2.0e-3, "rain: longest simulated time of each phase", "s"),
     "output": Key("str", "bed.h5", "the bed file written (relative to the current "
                   "directory); an impact scene loads it with [grains_file]"),
 }
@@ -375,9 +409,10 @@ SECTIONS = [
             "output.gauge_interval into the run file.", GAUGE),
     Section("shock", "table", "Analysis of a hammer-driven compaction run (wave front, jump "
             "conditions, Hugoniot, figures, summary) done when the run ends.", SHOCK),
-    Section("prepare", "table", "Sample preparation by `python -m pdfem prepare`: grains "
-            "rained into the chamber, a weight dropped on them, relaxation; ignored by "
-            "`run`.", PREPARE),
+    Section("prepare", "table", "Sample preparation by `python -m pdfem prepare`: a bed of "
+            "random elliptic grains, rained into the chamber and compacted by a dropped weight "
+            "(rain), or placed at random and grown to a target packing (geometric); ignored "
+            "by `run`.", PREPARE),
     Section("output", "table", "The HDF5 output file.", OUTPUT),
     Section("guards", "table", "Checks every step (non-finite values, inverted elements, "
             "contact overlap beyond delta_max, energy drift): a failed check stops every rank "

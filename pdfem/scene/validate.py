@@ -210,6 +210,11 @@ def _bcs(value, block_names):
             raise SceneError(f"{p}.velocity", "required for type velocity")
         if kind != "velocity" and "velocity" in bc:
             raise SceneError(f"{p}.velocity", f"only for type velocity (this is {kind})")
+        if "release" in bc and (kind != "velocity" or "body" not in bc):
+            raise SceneError(f"{p}.release", "only for type velocity on a body")
+        if bc["ramp_down"] > 0.0 and not bc["ramp_down"] <= bc.get("release", -1.0):
+            raise SceneError(f"{p}.ramp_down", f"needs release >= ramp_down (got ramp_down "
+                             f"{bc['ramp_down']!r}, release {bc.get('release', 'not given')})")
         out.append({k: bc[k] for k in S.BC if k in bc})
     return out
 
@@ -360,11 +365,14 @@ def _shock(value, r):
             raise SceneError("shock.solid_density", "required when no grain material is "
                              "named (grains_file.material or grains[0].material)")
         sh["solid_density"] = r["materials"][mat]["density"]
-    return {k: sh[k] for k in S.SHOCK}
+    if not sh["precursor_fraction"] < sh["front_fraction"]:
+        raise SceneError("shock.precursor_fraction", f"must be below front_fraction "
+                         f"{sh['front_fraction']!r} (got {sh['precursor_fraction']!r})")
+    return {k: sh[k] for k in S.SHOCK if k in sh}
 
 
 def _prepare(value, r, mat_ids):
-    """[prepare]: ranges ordered, material and weight known."""
+    """[prepare]: ranges ordered, material known; each method's own keys given."""
     pr = check_table(value, S.PREPARE, "prepare")
     for key in ("semi_axis", "aspect"):
         if pr[key][0] > pr[key][1]:
@@ -372,6 +380,11 @@ def _prepare(value, r, mat_ids):
     if pr["material"] not in mat_ids:
         raise SceneError("prepare.material", f"unknown material {show(pr['material'])} "
                          f"(known: {', '.join(mat_ids)})")
-    names = [b["name"] for b in r["blocks"]]
-    _known_block(pr["weight"], names, "prepare.weight")
-    return {k: pr[k] for k in S.PREPARE}
+    need = {"rain": ("grains", "weight"), "geometric": ("packing", "height")}[pr["method"]]
+    for key in need:
+        if key not in pr:
+            raise SceneError(f"prepare.{key}", f"required key missing (method "
+                             f"\"{pr['method']}\")")
+    if "weight" in pr:
+        _known_block(pr["weight"], [b["name"] for b in r["blocks"]], "prepare.weight")
+    return {k: pr[k] for k in S.PREPARE if k in pr}

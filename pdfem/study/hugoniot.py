@@ -1,0 +1,144 @@
+"""The bed's compaction Hugoniot and its static compression curve, as scenes derived from a
+shock scene (``pdfem sweep``).
+
+Shock points: the scene's hammer becomes a piston driven at a constant speed v until the
+slowest steady compaction wave the bed allows has crossed it (a faster wave arrives earlier
+and meets the anvil); no release. That slowest wave (:func:`slowest_front`) compacts the bed
+fully to grains that are themselves compressed: by the most their material allows under the
+wave's stress (sigma / K elastically, plus the cap's W); with rigid grains it is the
+snowplow wave, Us = up / (1 - rho0/rho_s).
+
+Static curve: the same bed compressed by the same piston slowly, with every density scaled
+by ``scale`` (mass scaling: the static stress does not depend on mass, the stable step grows
+by sqrt(scale)). A bed of disjoint grains resists only by inertia until it jams, and that
+inertia is what mass scaling multiplies: the piston at speed v meets a snowplow stress
+rho0 scale v^2 / (1 - phi0), the floor below which the curve is not static. The run prints
+it; the piston's and the anvil's stresses agree where the compression is static.
+"""
+
+import copy
+import math
+
+import numpy as np
+
+from pdfem.errors import InputError
+from pdfem.prepare.packing import outlines, polygon_areas
+
+# Mass scale and piston speed of the static compression: a snowplow floor of
+# 1235 x 100 x 4^2 / 0.35 = 5.6 MPa for the packaged bed
+STATIC_SCALE, STATIC_SPEED = 100.0, 4.0
+# Compaction the static run goes to beyond full density (1 - phi0)
+STATIC_BEYOND = 0.03
+
+
+def bed_figures(scene):
+    """(H0, phi0, width) of a shock scene: bed height from the anvil face to the hammer face,
+    packing as meshed grain area over width x H0."""
+    r = scene.resolved
+    sh = r["shock"]
+    boxes = {b["name"]: b["box"] for b in r["blocks"]}
+    H0 = boxes[sh["hammer"]][1] - boxes[sh["anvil"]][3]
+    width = r["domain"]["box"][2] - r["domain"]["box"][0]
+    g = scene.grains
+    if "nodes" in g:
+        area = float(polygon_areas(outlines(g["nodes"], r["element"]["level"])).sum())
+    else:
+        area = float(np.sum(math.pi * g["axes"][:, 0] * g["axes"][:, 1]))
+    return H0, area / (width * H0), width
+
+
+def slowest_front(up, rho0, rho_s, bulk, w=0.0):
+    """Slowest steady front at particle velocity up into a bed rho0 of grains rho_s: full
+    compaction to rho1 = rho_s / ((1 - sigma/K)(1 - W)), sigma = rho0 Us up (the grains'
+    volume strain is at most the mean stress over K, the mean stress at most sigma, plus the
+    cap's largest plastic compaction W); Us = up / (1 - rho0/rho1), solved by fixed point."""
+    us = up / (1.0 - rho0 / rho_s)
+    for _ in range(200):
+        comp = (1.0 - rho0 * us * up / bulk) * (1.0 - w)
+        if not comp > rho0 / rho_s:
+            return math.nan
+        new = up / (1.0 - rho0 / (rho_s / comp))
+        if abs(new - us) <= 1e-12 * us:
+            break
+        us = new
+    return us
+
+
+def grain_material(r):
+    """The grain material's table of a resolved shock scene."""
+    mat = r.get("grains_file", {}).get("material") or r["grains"][0]["material"]
+    return r["materials"][mat]
+
+
+def _piston(doc, hammer, speed):
+    """The hammer of ``doc`` as a piston at ``speed`` (m/s, downward) to the end."""
+    for blk in doc["blocks"]:
+        if blk["name"] == hammer:
+            blk["velocity"] = [0.0, -speed]
+    bcs = [bc for bc in doc.get("bc", []) if not (bc.get("body") == hammer
+                                                 and bc.get("type") == "velocity")]
+    bcs.append({"body": hammer, "type": "velocity", "velocity": [0.0, -speed]})
+    doc["bc"] = bcs
+
+
+def shock_doc(doc, hammer, speed, H0, us_min):
+    """Scene of one Hugoniot point: piston at ``speed`` until a front at ``us_min`` has
+    crossed the bed, H0 / us_min."""
+    d = copy.deepcopy(doc)
+    _piston(d, hammer, speed)
+    end = H0 / us_min
+    d["time"] = dict(d["time"], end=end)
+    d.setdefault("output", {}).update(interval=end / 40, energy_interval=end / 200,
+                                      gauge_interval=end / 2000)
+    d.setdefault("shock", {})["plots"] = "none"
+    return d
+
+
+def static_doc(doc, hammer, H0, phi0, scale=STATIC_SCALE, speed=STATIC_SPEED):
+    """Scene of the static compression (see the module docstring) and its snowplow floor."""
+    d = copy.deepcopy(doc)
+    _piston(d, hammer, speed)
+    for m in d["materials"].values():
+        m["density"] = scale * m["density"]
+    for key in ("bulk_viscosity", "damping", "shock", "gravity"):
+        d.pop(key, None)
+    end = H0 * (1.0 - phi0 + STATIC_BEYOND) / speed
+    d["time"] = dict(d["time"], end=end)
+    d["output"] = dict(d.get("output", {}), interval=end / 10, energy_interval=end / 200,
+                       gauge_interval=end / 400)
+    floor = phi0 * scale * speed ** 2 / (1.0 - phi0) * _solid_density(d, scale)
+    return d, floor
+
+
+def _solid_density(d, scale):
+    """Grain density (unscaled) of a derived scene."""
+    mat = d.get("grains_file", {}).get("material") or d["grains"][0]["material"]
+    return d["materials"][mat]["density"] / scale
+
+
+def static_curve(path, hammer_gauge, anvil_gauge, H0, rho0, width, speed):
+    """The stress-density curve of a static run file, per gauge sample: time, density
+    rho0 H0 / (H0 - v t), the piston's and the anvil's stresses (their contact forces over the
+    width, compressive positive); and the largest kinetic energy over the work the piston
+    has done by then (energy samples), the measure of how static the compression was."""
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        t = f["gauges/time"][:]
+        piston = f[f"gauges/{hammer_gauge}/force"][:, 1] / width
+        anvil = -f[f"gauges/{anvil_gauge}/force"][:, 1] / width
+        e = {k: f[f"energy/{k}"][:] for k in ("time", "kinetic", "bc_work")}
+    H = H0 - speed * t
+    # Kinetic energy gained (the piston's own is constant) over the work, once it is 1 % of
+    # the final work
+    gain, work = e["kinetic"] - e["kinetic"][0], e["bc_work"]
+    sel = work > 0.01 * work[-1]
+    ratio = float(np.max(gain[sel] / work[sel])) if sel.any() and work[-1] > 0 else math.nan
+    return {"time": t, "density": rho0 * H0 / H, "sigma_piston": piston,
+            "sigma_anvil": anvil, "kinetic_over_work": ratio}
+
+
+def check_scene(scene, path):
+    """A shock scene the sweep can drive: InputError naming the file otherwise."""
+    if "shock" not in scene.resolved:
+        raise InputError(f"{path}: shock: sweep needs a scene with a [shock] table")

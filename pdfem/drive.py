@@ -4,8 +4,9 @@ A ``[[bc]]`` of type velocity on a block with ``release`` prescribes ``velocity`
 ``release - ramp_down``, then a velocity falling linearly to zero at ``release``, after which
 the block's nodes are free: a piston that drives a bed at a steady speed, is brought to rest
 and let go, so that what the bed does after the drive (spring back, stay compacted) is its
-own. The prescribed value of a half step is the profile at the middle of its interval; the
-reaction's work is accounted by the integrator as for any velocity condition.
+own. The prescribed value of a half step is the profile at the end of its interval, so the
+last interval before the release brings the body exactly to rest; the reaction's work is
+accounted by the integrator as for any velocity condition.
 """
 
 import numpy as np
@@ -40,16 +41,16 @@ class Drives:
     def __len__(self):
         return len(self.items)
 
-    def apply(self, sim, t):
-        """Set the prescribed velocities of the half step centred at t (or free the nodes)."""
+    def apply(self, sim, t0, t1):
+        """Set the prescribed velocities of the half step from t0 to t1 (the profile at t1),
+        or free the nodes when it starts at or after the release."""
         s = sim.store
         own = s.gid[: s.nb_own]
         for gid, local, dofs, vel, release, ramp in self.items:
             b = int(np.nonzero(own == gid)[0][0])
             nodes = s.nstart[b] + local
-            f = factor(t, release, ramp)
             for c in dofs:
-                if t < release:
-                    s.bcv[nodes, c] = f * vel[c]
-                else:
+                if t0 >= release:
                     s.bcf[nodes, c] = 0
+                else:
+                    s.bcv[nodes, c] = factor(t1, release, ramp) * vel[c]

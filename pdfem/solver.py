@@ -16,10 +16,10 @@ from mpi4py import MPI
 
 from partition import CellGrid, needs_rebalance, partition
 from pdfem import build
+from pdfem.drive import Drives
 from pdfem.effects import active_effects
 from pdfem.effects.contact import check_contact_scene
 from pdfem.energy import energy_floor, initial_strain_work
-from pdfem.drive import Drives
 from pdfem.errors import InputError, SimulationError
 from pdfem.guards import Guards, contact_stiffness_cap
 from pdfem.kernels.checks import first_nonfinite
@@ -359,7 +359,7 @@ class Simulation:
         s = self.store
         dt_avg = 0.5 * (self.dt_prev + self.dt)
         if len(self.drives):
-            self.drives.apply(self, self.t + 0.5 * self.dt)
+            self.drives.apply(self, self.t, self.t + self.dt)
         with self.timers.phase("integration"):
             advance_velocities(s.v, self.f, s.m, s.bcf, s.bcv, self.gamma, dt_avg, s.nn_own,
                                s.node_body, s.acc, self.kin[: s.nb_own], first, self.fc)

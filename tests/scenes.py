@@ -329,3 +329,40 @@ interval = 5.0e-8
 energy_interval = 2.5e-8
 gauge_interval = 1.0e-8
 """
+
+
+def packaged(name):
+    """A packaged scene (pdfem/scenes) as a dict, its bed path made absolute."""
+    import tomllib
+    from importlib import resources
+
+    path = resources.files("pdfem") / "scenes" / name
+    with open(path, "rb") as f:
+        doc = tomllib.load(f)
+    if "grains_file" in doc:
+        doc["grains_file"]["path"] = str(path.parent / doc["grains_file"]["path"])
+    return doc
+
+
+def write_scene(path, doc):
+    """Write a scene dict as TOML (the scene loader reads it back); return the path."""
+    from pdfem.scene.toml_out import dumps
+
+    path.write_text(dumps(doc))
+    return path
+
+
+def small_prepare(out="bed.h5", **prepare):
+    """The packaged small geometric preparation (1 mm x 2 mm at 0.65), [prepare] overridden."""
+    doc = packaged("shot912_small_prepare.toml")
+    doc["prepare"].update(output=out, **prepare)
+    return doc
+
+
+def small_shock(bed, out="shock.h5", plots="none"):
+    """The packaged small piston shot on the bed file ``bed``."""
+    doc = packaged("shot912_small.toml")
+    doc["grains_file"]["path"] = str(bed)
+    doc["output"]["path"] = out
+    doc["shock"]["plots"] = plots
+    return doc

@@ -45,3 +45,33 @@ def test_point_outside_every_element_is_an_input_error(tmp_path):
     sim_text = '[[gauges]]\nname = "g"\npoint = [0.0239, 0.0059]\n'
     with pytest.raises(InputError, match=r"gauges\[0\]\.point: no element contains"):
         Gauges(_sim(tmp_path, sim_text))
+
+
+def test_block_gauge_reads_the_contact_force_on_its_nodes(tmp_path):
+    """A plate moving down onto a grain: the gauge of its bottom row reads the contact force
+    on those nodes (N/m), which is minus the force on the grain (the contact law's forces add
+    up to zero); before the contact it reads zero."""
+    doc = {
+        "domain": {"box": [0.0, 0.0, 1.0e-3, 1.0e-3]},
+        "time": {"end": 1.0e-6, "safety": 0.5},
+        "contact": {"kn0": 1.0e14, "delta_max": 2.0e-5},
+        "materials": {"grain": {"density": 1900.0, "bulk": 12.7e9, "shear": 4.4e9},
+                      "steel": {"density": 7850.0, "bulk": 160.0e9, "shear": 79.0e9}},
+        "grains": [{"center": [5.0e-4, 4.0e-4], "axes": [2.0e-4, 1.5e-4],
+                    "material": "grain"}],
+        "blocks": [{"name": "plate", "box": [0.0, 5.52e-4, 1.0e-3, 6.5e-4], "nx": 4,
+                    "material": "steel", "velocity": [0.0, -20.0]}],
+        "gauges": [{"name": "g", "body": "plate", "side": "bottom"}],
+        "output": {"path": str(tmp_path / "r.h5"), "interval": 1.0e-6},
+    }
+    sim = Simulation(parse_scene(doc, tmp_path), MPI.COMM_SELF)
+    g = Gauges(sim)
+    assert np.all(g.values(sim)[0, 6:] == 0.0)
+    while sim.t < sim.t_end:
+        sim.step()
+    vals = g.values(sim)
+    s = sim.store
+    grain = [b for b in range(s.nb_own) if not s.isglobal[b]][0]
+    on_grain = sim.fc[s.nstart[grain]:s.nstart[grain] + s.nn[grain]].sum(axis=0)
+    assert vals[0, 7] > 0.0 and on_grain[1] < 0.0
+    assert np.allclose(vals[0, 6:], -on_grain, rtol=1e-9, atol=1e-9 * abs(on_grain[1]))

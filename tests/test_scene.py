@@ -317,6 +317,14 @@ MISTAKES = [
     ("bc body and wall", _set(("bc", 0, "wall"), "left"), "bc[0]: give exactly one of"),
     ("roller on all nodes", _add_bc({"body": "piston", "type": "roller"}),
      'bc[4].dof: required for a roller on nodes = "all"'),
+    ("release on a fixed bc", _set(("bc", 0, "release"), 1e-6),
+     "bc[0].release: only for type velocity on a body"),
+    ("ramp_down without release", _set(("bc", 1, "ramp_down"), 1e-7),
+     "bc[1].ramp_down: needs release >= ramp_down"),
+    ("ramp_down past release", _add_bc({"body": "piston", "type": "velocity",
+                                        "velocity": [0.0, -1.0], "release": 1e-7,
+                                        "ramp_down": 2e-7}),
+     "bc[4].ramp_down: needs release >= ramp_down"),
     ("frictional wall", _set(("walls", "friction"), 0.0), "walls.friction: must be > 0"),
     ("contact pair material", _set(("contact", "pairs", "glass:steel"), {}),
      'contact.pairs."glass:steel": expected "mat1:mat2"'),
@@ -421,10 +429,18 @@ def test_validation_timing_1e5_grains(tmp_path, capsys):
 
 
 def test_packaged_default_scene_and_bed_load():
+    import h5py
+
     from pdfem.cli.run import default_scene_path
 
     sc = load_scene(default_scene_path())
     r = sc.resolved
-    assert sc.n_grains == 84 and "nodes" in sc.grains and "elem_sig" in sc.grains
+    # The geometric bed: 16 grains wide, stress-free, at 0.65 of the crystal's density
+    assert sc.n_grains > 200 and "nodes" in sc.grains and "elem_sig" not in sc.grains
+    with h5py.File(r["grains_file"]["path"]) as f:
+        assert f.attrs["method"] == "geometric" and f.attrs["packing_target"] == 0.65
+        assert abs(f.attrs["packing_fraction"] - 0.65) <= 0.01
+    assert r["materials"]["hmx"]["density"] == 1900.0 and r["shock"]["solid_density"] == 1900.0
+    assert r["domain"]["box"][2] - r["domain"]["box"][0] >= 16 * 0.245e-3
     assert r["materials"]["hmx"]["model"] == "cap" and r["shock"]["hammer"] == "hammer"
     assert [g["name"] for g in r["gauges"]] == ["hammer", "bottom"]

@@ -176,7 +176,7 @@ def sweep_plot(points, path, static=None):
                    label="static run's snowplow floor")
     top = np.nanmax(np.append(sig, 1.0)) * MPA
     a2.set_ylim(0.0, 1.3 * top)
-    a2.set_xlim(0.9 * r0, 1.15 * rs)
+    a2.set_xlim(0.9 * r0, max(1.15 * rs, 1.05 * np.nanmax(np.append(rho1, rs))))
     a2.set_xlabel("density [kg/m^3]")
     a2.set_ylabel("stress [MPa] (compression > 0)")
     _save(fig, path, (a1, a2))

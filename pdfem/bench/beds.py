@@ -53,8 +53,8 @@ def hex_bed(n, r0=2.0e-4, seed=0):
     return cols, box
 
 
-# Grain materials of the benchmark beds: elastic HMX, or HMX with the scene's cap set
-# (pdfem/scenes/shot912.toml, crystal density)
+# Grain materials of the benchmark beds: elastic HMX, or HMX with a crushable cap set
+# (pressure-dependent envelope, cap within reach: the material kernel's dearer paths)
 MATERIALS = {
     "elastic": 'model = "elastic"\ndensity = 1900.0\nbulk = 12.7e9\nshear = 4.4e9\n',
     "cap": ('model = "cap"\ndensity = 1900.0\nbulk = 12.7e9\nshear = 4.4e9\nA = 2.0e8\n'

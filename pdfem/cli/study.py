@@ -3,7 +3,9 @@
 - ``study accuracy [scene]``: what accuracy costs in time on a shock scene (grid of mesh
   levels, element rules, safety factors and contact stiffnesses against the finest run;
   CSV, Pareto figure, the settings for a 5 % answer) and the element's convergence order;
-- ``study convergence``: the element's observed order on a standing elastic wave.
+- ``study convergence``: the element's observed order on a standing elastic wave;
+- ``study hard``: hard cases on 1 and N ranks;
+- ``study width``: the shot-912 wave in beds of several widths and over seeds.
 
 Each study is one entry of :data:`STUDIES`: a function adding its arguments and one running
 it, so another study is one more entry.
@@ -254,6 +256,56 @@ def _hard(args):
     return 0
 
 
+def _width_args(p):
+    p.add_argument("--widths", default="4,8,16,32", help="bed widths in grains (0.25 mm "
+                   "each, the packaged bed's 4 mm for 16) (default 4,8,16,32)")
+    p.add_argument("--seeds", type=int, default=5, help="seeds of the bed at --seed-width, "
+                   "the packaged one first (default 5)")
+    p.add_argument("--seed-width", type=float, default=16.0, help="width in grains of the "
+                   "seed beds (default 16)")
+    p.add_argument("-p", "--prefix", default="study-width", help="the table to "
+                   "<prefix>.json, beds and runs in <prefix>-runs/ (default study-width)")
+    p.add_argument("--force", action="store_true", help="overwrite existing output")
+
+
+def _width(args):
+    import json
+
+    from pdfem.cli.run import check_output_path
+    from pdfem.parallel.mpi import world
+    from pdfem.study import width as ws
+
+    widths = _check(_numbers(args.widths, "--widths"), lambda v: 1.0 <= v <= 4096.0,
+                    "--widths", "a width in [1, 4096] grains")
+    if not 1 <= args.seeds <= 100:
+        raise InputError(f"--seeds: must be in [1, 100] (got {args.seeds})")
+    if not 1.0 <= args.seed_width <= 4096.0:
+        raise InputError(f"--seed-width: must be in [1, 4096] grains (got {args.seed_width})")
+    check_output_path(args.prefix + ".json", args.force, "--prefix")
+    folder = args.prefix + "-runs"
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise InputError(f"--prefix: {folder} exists and is not a folder")
+    comm = world()
+    if comm.rank == 0:
+        if os.path.isdir(folder) and args.force:
+            shutil.rmtree(folder)
+        os.makedirs(folder, exist_ok=True)
+    comm.Barrier()
+    rows = ws.run_study(widths, args.seeds, args.seed_width, folder, comm,
+                        lambda s: print(s, flush=True))
+    if comm.rank == 0:
+        from pdfem.analysis.summary import _plain
+
+        lines = ws.table_lines(rows) + [""] + ws.conclusions(rows)
+        print("", *lines, sep="\n")
+        with open(args.prefix + ".json.part", "w") as f:
+            json.dump(_plain({"rows": rows, "conclusions": lines}), f, indent=1)
+        os.replace(args.prefix + ".json.part", args.prefix + ".json")
+        print(f"pdfem study width: {args.prefix}.json, beds and runs in {folder}/", flush=True)
+    comm.Barrier()
+    return 0
+
+
 # Study name -> (help, add its arguments, run it)
 STUDIES = {
     "accuracy": ("what accuracy costs in time on a shock scene: mesh level, element rule, "
@@ -265,12 +317,15 @@ STUDIES = {
              "migration, squeezing, tight conduction, long settling) on 1 and N ranks: "
              "energy balance, finiteness, Jacobians, bit-identity (under mpirun)",
              _hard_args, _hard),
+    "width": ("the shot-912 wave in beds of several widths and seeds: Us and arrival against "
+              "width, their spread over seeds", _width_args, _width),
 }
 
 
 def add_parser(sub):
     p = sub.add_parser("study", help="studies of the solver: accuracy (accuracy against "
-                       "cost on a shock scene), convergence (element order), hard (hard cases)")
+                       "cost on a shock scene), convergence (element order), hard (hard "
+                       "cases), width (bed width and seed)")
     studies = p.add_subparsers(dest="study", metavar="STUDY", required=True)
     for name, (text, add_args, _) in STUDIES.items():
         add_args(studies.add_parser(name, help=text, description=text))

@@ -158,11 +158,12 @@ def _static(args, scene, doc, sh, H0, phi0, width, comm):
         return None
     rho_s = sh["solid_density"]
     c = hg.static_curve(out, sh["hammer_gauge"], sh["anvil_gauge"], H0, phi0 * rho_s, width,
-                        hg.STATIC_SPEED)
+                        hg.STATIC_SPEED, floor)
     c.update(floor=floor, wall_s=summary["wall_s"], scale=hg.STATIC_SCALE,
              speed=hg.STATIC_SPEED)
-    print(f"  largest kinetic energy / piston work {c['kinetic_over_work']:.3g}; "
-          f"{summary['wall_s']:.0f} s", flush=True)
+    print(f"  the bed jams at {c['jamming_density']:.0f} kg/m3 (packing "
+          f"{c['jamming_density'] / rho_s:.3f}); kinetic energy gained / piston work at the end "
+          f"{c['kinetic_over_work']:.3g}; {summary['wall_s']:.0f} s", flush=True)
     return c
 
 

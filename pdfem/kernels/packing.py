@@ -156,15 +156,18 @@ def _limit_at(i, cxi, cyi, vi, cx, cy, verts, rad, scale, s_stop, box, cell, sta
 
 
 @njit(cache=True)
-def grow_sweep(cx, cy, verts, rad, scale, box, cell, start, items, nx, ny):
+def grow_sweep(cx, cy, verts, rad, scale, rate, box, cell, start, items, nx, ny):
     """Every grain in index order grows half-way to the largest scale its walls and
-    neighbours (at their current scales) allow, to 1 at most. Returns the smallest scale."""
+    neighbours (at their current scales) allow, by the factor 1 + rate at most, to 1 at most
+    (a grain that took all its room at once would leave the moves none). Returns the
+    smallest scale."""
     smin = math.inf
     for i in range(cx.shape[0]):
         if scale[i] < 1.0:
             lim = _limit_at(i, cx[i], cy[i], verts[i], cx, cy, verts, rad, scale, -math.inf,
                             box, cell, start, items, nx, ny)
-            scale[i] = 1.0 if lim > 1.0 else scale[i] + 0.5 * (lim - scale[i])
+            new = min(scale[i] + 0.5 * (lim - scale[i]), scale[i] * (1.0 + rate))
+            scale[i] = 1.0 if new >= 1.0 and lim > 1.0 else min(new, 1.0)
         smin = min(smin, scale[i])
     return smin
 

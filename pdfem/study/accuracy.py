@@ -165,10 +165,15 @@ class AccuracyStudy:
 
     def scene_of(self, setting, name):
         """The checked scene of a setting: the scene dict with its element, time step,
-        contact stiffness and bed replaced; no figures, no checkpoints."""
+        contact stiffness and bed replaced; no figures, no checkpoints; a driven hammer that
+        is released ends the run there (the study measures the wave, not the spring-back)."""
         from pdfem.scene import parse_scene
 
         doc = copy.deepcopy(self.doc)
+        hammer = self.scene.resolved.get("shock", {}).get("hammer")
+        for bc in self.scene.resolved.get("bc", []):
+            if bc.get("body") == hammer and "release" in bc:
+                doc["time"]["end"] = min(doc["time"]["end"], bc["release"])
         doc.setdefault("element", {}).update(rule=setting.rule, level=setting.level)
         doc.setdefault("time", {})["safety"] = setting.safety
         scale_contact(doc, setting.kn0_scale)

@@ -116,11 +116,13 @@ def _solid_density(d, scale):
     return d["materials"][mat]["density"] / scale
 
 
-def static_curve(path, hammer_gauge, anvil_gauge, H0, rho0, width, speed):
+def static_curve(path, hammer_gauge, anvil_gauge, H0, rho0, width, speed, floor):
     """The stress-density curve of a static run file, per gauge sample: time, density
     rho0 H0 / (H0 - v t), the piston's and the anvil's stresses (their contact forces over the
-    width, compressive positive); and the largest kinetic energy over the work the piston
-    has done by then (energy samples), the measure of how static the compression was."""
+    width, compressive positive); the kinetic energy gained over the work the piston has done
+    at the end (how static the compression was), and the density at which the piston's
+    stress first exceeds twice the snowplow ``floor`` (the bed jams: below it the piston
+    meets only the grains' inertia)."""
     import h5py
 
     with h5py.File(path, "r") as f:
@@ -129,13 +131,13 @@ def static_curve(path, hammer_gauge, anvil_gauge, H0, rho0, width, speed):
         anvil = -f[f"gauges/{anvil_gauge}/force"][:, 1] / width
         e = {k: f[f"energy/{k}"][:] for k in ("time", "kinetic", "bc_work")}
     H = H0 - speed * t
-    # Kinetic energy gained (the piston's own is constant) over the work, once it is 1 % of
-    # the final work
-    gain, work = e["kinetic"] - e["kinetic"][0], e["bc_work"]
-    sel = work > 0.01 * work[-1]
-    ratio = float(np.max(gain[sel] / work[sel])) if sel.any() and work[-1] > 0 else math.nan
-    return {"time": t, "density": rho0 * H0 / H, "sigma_piston": piston,
-            "sigma_anvil": anvil, "kinetic_over_work": ratio}
+    # Kinetic energy gained (the piston's own is constant) over the work, at the end
+    gain, work = e["kinetic"][-1] - e["kinetic"][0], e["bc_work"][-1]
+    dens = rho0 * H0 / H
+    jam = np.flatnonzero(piston > 2.0 * floor)
+    return {"time": t, "density": dens, "sigma_piston": piston, "sigma_anvil": anvil,
+            "kinetic_over_work": float(gain / work) if work > 0 else math.nan,
+            "jamming_density": float(dens[jam[0]]) if jam.size else math.nan}
 
 
 def check_scene(scene, path):

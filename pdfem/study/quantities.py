@@ -2,10 +2,12 @@
 
 Us and the arrival come from the front fit of the shock analysis
 (:func:`pdfem.analysis.analyse`: the fitted front line reaching the bed bottom); the peak
-stress is the hammer gauge's until that arrival (the impact peak that drives the wave; later
-the reflected wave loads the hammer again and both gauges keep rising as the bed locks up,
-so a maximum over the whole run would measure the end time); the packing fraction is the
-grains' area over the bed's volume at the last frame.
+stress is the hammer's until that arrival (the impact peak that drives the wave; later the
+reflected wave loads the hammer again and both gauges keep rising as the bed locks up, so a
+maximum over the whole run would measure the end time): the bed's push on a driven hammer
+(contact force over the width; a rigid piston has no stress of its own), the hammer gauge's
+stress on a free one; the packing fraction is the grains' area over the bed's volume at the
+last frame.
 """
 
 import math
@@ -34,10 +36,13 @@ def final_packing(run):
 
 
 def impact_peak(run, until):
-    """Peak compressive stress -sigma_yy of the hammer gauge while the front crosses the bed
-    (samples up to time ``until``; the whole run when ``until`` is NaN)."""
+    """Peak compressive stress on the hammer while the front crosses the bed (samples up to
+    time ``until``; the whole run when ``until`` is NaN): the contact force over the width on
+    a driven hammer, the gauge's -sigma_yy on a free one."""
     t = run.gauge_time
-    comp = -run.gauges[run.shock["hammer_gauge"]]["stress"][:, 1]
+    g = run.gauges[run.shock["hammer_gauge"]]
+    driven = run.drive["driven"] and g.get("force") is not None
+    comp = g["force"][:, 1] / run.width if driven else -g["stress"][:, 1]
     sel = t <= until if math.isfinite(until) else np.ones(t.shape, bool)
     return float(comp[sel].max()) if sel.any() else math.nan
 

@@ -2,6 +2,7 @@
 convergence study, and bad input (one line, exit status 2)."""
 
 import csv
+import json
 import re
 
 import pytest
@@ -44,6 +45,25 @@ def test_tiny_accuracy_study_on_2_ranks(tmp_path):
     again = pdfem(args + ["--no-convergence"], tmp_path)
     assert again.returncode == 2 and len(again.stderr.strip().splitlines()) == 1
     assert "--prefix: acc.csv exists" in again.stderr
+
+
+def test_width_study_on_2_ranks(tmp_path):
+    """Two seeds of the packaged bed 2 grains wide (0.5 mm): a row per bed with its front
+    speed, the table and the seeds' spread printed; nothing overwritten without --force."""
+    args = ["study", "width", "--widths", "2", "--seeds", "2", "--seed-width", "2", "-p", "w"]
+    p = pdfem(args, tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    body = json.loads((tmp_path / "w.json").read_text())
+    rows = body["rows"]
+    assert [(r["grains_wide"], r["seed"]) for r in rows] == [(2.0, 912), (2.0, 913)]
+    for r in rows:
+        assert r["width"] == pytest.approx(0.5e-3) and r["grains"] > 10
+        assert r["us_fit"] > 0 and r["arrival_gauge"] > 0
+        assert abs(r["rho0"] - 1235.0) < 0.02 * 1240.0
+    assert body["conclusions"][0].startswith("2 grains wide: Us")
+    assert "Us m/s" in p.stdout
+    again = pdfem(args, tmp_path)
+    assert again.returncode == 2 and "--prefix: w.json exists" in again.stderr
 
 
 def test_convergence_study_prints_orders(tmp_path):

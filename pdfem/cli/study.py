@@ -296,10 +296,10 @@ def _width(args):
     if comm.rank == 0:
         from pdfem.analysis.summary import _plain
 
-        lines = ws.table_lines(rows) + [""] + ws.conclusions(rows)
-        print("", *lines, sep="\n")
+        table, found = ws.table_lines(rows), ws.conclusions(rows)
+        print("", *table, "", *found, sep="\n")
         with open(args.prefix + ".json.part", "w") as f:
-            json.dump(_plain({"rows": rows, "conclusions": lines}), f, indent=1)
+            json.dump(_plain({"rows": rows, "conclusions": found}), f, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         print(f"pdfem study width: {args.prefix}.json, beds and runs in {folder}/", flush=True)
     comm.Barrier()

@@ -41,8 +41,8 @@ from pdfem.kernels.packing import (
     min_pair_scale,
     rotate_into,
     rsa_place,
-    slab_areas,
 )
+from pdfem.kernels.polygon import slab_areas
 from pdfem.mesh.ellipse import ellipse_mesh, place
 from pdfem.prepare.packing import polygon_areas
 
@@ -97,8 +97,7 @@ class Packing:
     """Hard grain polygons in the box [x0, y0, x1, y1]: placement, growth, shaking."""
 
     def __init__(self, a, b, angle, level, box, rng):
-        _, _, bnd = ellipse_mesh(1.0, 1.0, level)
-        unit, _, _ = ellipse_mesh(1.0, 1.0, level)
+        unit, _, bnd = ellipse_mesh(1.0, 1.0, level)
         self.base = np.ascontiguousarray(unit[bnd][None, :, :] * np.stack([a, b], 1)[:, None, :])
         self.n = a.shape[0]
         self.a, self.b = a, b

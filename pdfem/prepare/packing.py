@@ -20,7 +20,8 @@ import math
 
 import numpy as np
 
-from pdfem.kernels.packing import build_cells, nearest_gaps, slab_areas
+from pdfem.kernels.packing import build_cells
+from pdfem.kernels.polygon import nearest_gaps, slab_areas
 from pdfem.mesh.ellipse import ellipse_mesh
 
 # Neighbour distances counted by the gap figures, in mean grain diameters

@@ -22,6 +22,7 @@ import math
 import numpy as np
 
 from pdfem.errors import InputError
+from pdfem.mesh.ellipse import ellipse_mesh
 from pdfem.prepare.packing import outlines, polygon_areas
 
 # Mass scale and piston speed of the static compression: a snowplow floor of
@@ -39,11 +40,14 @@ def bed_figures(scene):
     boxes = {b["name"]: b["box"] for b in r["blocks"]}
     H0 = boxes[sh["hammer"]][1] - boxes[sh["anvil"]][3]
     width = r["domain"]["box"][2] - r["domain"]["box"][0]
-    g = scene.grains
+    g, level = scene.grains, r["element"]["level"]
     if "nodes" in g:
-        area = float(polygon_areas(outlines(g["nodes"], r["element"]["level"])).sum())
+        area = float(polygon_areas(outlines(g["nodes"], level)).sum())
     else:
-        area = float(np.sum(math.pi * g["axes"][:, 0] * g["axes"][:, 1]))
+        # Meshed grains: the unit grain's polygon scaled by the semi-axes
+        xy, _, bnd = ellipse_mesh(1.0, 1.0, level)
+        unit = float(polygon_areas(xy[bnd][None])[0])
+        area = unit * float(np.sum(g["axes"][:, 0] * g["axes"][:, 1]))
     return H0, area / (width * H0), width
 
 
@@ -120,9 +124,9 @@ def static_curve(path, hammer_gauge, anvil_gauge, H0, rho0, width, speed, floor)
     """The stress-density curve of a static run file, per gauge sample: time, density
     rho0 H0 / (H0 - v t), the piston's and the anvil's stresses (their contact forces over the
     width, compressive positive); the kinetic energy gained over the work the piston has done
-    at the end (how static the compression was), and the density at which the piston's
-    stress first exceeds twice the snowplow ``floor`` (the bed jams: below it the piston
-    meets only the grains' inertia)."""
+    at the end (how static the compression was), and the density from which on the piston's
+    stress stays above twice the snowplow ``floor`` (the bed jams: below it the piston meets
+    only the grains' inertia)."""
     import h5py
 
     with h5py.File(path, "r") as f:
@@ -134,10 +138,11 @@ def static_curve(path, hammer_gauge, anvil_gauge, H0, rho0, width, speed, floor)
     # Kinetic energy gained (the piston's own is constant) over the work, at the end
     gain, work = e["kinetic"][-1] - e["kinetic"][0], e["bc_work"][-1]
     dens = rho0 * H0 / H
-    jam = np.flatnonzero(piston > 2.0 * floor)
+    low = np.flatnonzero(piston <= 2.0 * floor)
+    jam = low[-1] + 1 if low.size else 0
     return {"time": t, "density": dens, "sigma_piston": piston, "sigma_anvil": anvil,
             "kinetic_over_work": float(gain / work) if work > 0 else math.nan,
-            "jamming_density": float(dens[jam[0]]) if jam.size else math.nan}
+            "jamming_density": float(dens[jam]) if jam < dens.size else math.nan}
 
 
 def check_scene(scene, path):

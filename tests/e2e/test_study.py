@@ -48,19 +48,19 @@ def test_tiny_accuracy_study_on_2_ranks(tmp_path):
 
 
 def test_width_study_on_2_ranks(tmp_path):
-    """Two seeds of the packaged bed 2 grains wide (0.5 mm): a row per bed with its front
+    """Two seeds of the packaged bed 4 grains wide (1 mm): a row per bed with its front
     speed, the table and the seeds' spread printed; nothing overwritten without --force."""
-    args = ["study", "width", "--widths", "2", "--seeds", "2", "--seed-width", "2", "-p", "w"]
+    args = ["study", "width", "--widths", "4", "--seeds", "2", "--seed-width", "4", "-p", "w"]
     p = pdfem(args, tmp_path, ranks=2)
     assert p.returncode == 0, p.stderr
     body = json.loads((tmp_path / "w.json").read_text())
     rows = body["rows"]
-    assert [(r["grains_wide"], r["seed"]) for r in rows] == [(2.0, 912), (2.0, 913)]
+    assert [(r["grains_wide"], r["seed"]) for r in rows] == [(4.0, 912), (4.0, 913)]
     for r in rows:
-        assert r["width"] == pytest.approx(0.5e-3) and r["grains"] > 10
+        assert r["width"] == pytest.approx(1.0e-3) and r["grains"] > 40
         assert r["us_fit"] > 0 and r["arrival_gauge"] > 0
         assert abs(r["rho0"] - 1235.0) < 0.02 * 1240.0
-    assert body["conclusions"][0].startswith("2 grains wide: Us")
+    assert body["conclusions"][0].startswith("4 grains wide: Us")
     assert "Us m/s" in p.stdout
     again = pdfem(args, tmp_path)
     assert again.returncode == 2 and "--prefix: w.json exists" in again.stderr

@@ -1,4 +1,5 @@
-"""Packing kernels (pdfem.kernels.packing) against closed forms and brute force."""
+"""Packing and polygon kernels (pdfem.kernels.packing, .polygon) against closed forms and
+brute force."""
 
 import math
 
@@ -12,12 +13,10 @@ from pdfem.kernels.packing import (
     min_pair_scale,
     pair_limit,
     pair_scale,
-    polygon_gap,
     rotate_into,
-    slab_area,
-    slab_areas,
     wall_scale,
 )
+from pdfem.kernels.polygon import polygon_gap, slab_area, slab_areas
 
 
 def square(h, angle=0.0):

@@ -26,17 +26,22 @@ def bed_geometry(grain_top0, hammer_y0, anvil_y0, diameter, tol=0.05):
             "top_from": src, "gap": gap}
 
 
-def impact_time(time, hammer_y, y_top0):
-    """Time at which the hammer face first reaches the bed top (interpolated); NaN if never."""
-    below = np.flatnonzero(hammer_y <= y_top0)
+def first_below(time, y, level):
+    """First time the series y comes down to ``level`` (linear between the last frame above
+    and the first at or below); NaN if never."""
+    below = np.flatnonzero(y <= level)
     if below.size == 0:
         return NAN
     k = below[0]
     if k == 0:
         return float(time[0])
-    # Linear interpolation between the last frame above and the first at or below
-    y0, y1 = hammer_y[k - 1], hammer_y[k]
-    return float(time[k - 1] + (y0 - y_top0) / (y0 - y1) * (time[k] - time[k - 1]))
+    y0, y1 = y[k - 1], y[k]
+    return float(time[k - 1] + (y0 - level) / (y0 - y1) * (time[k] - time[k - 1]))
+
+
+def impact_time(time, hammer_y, y_top0):
+    """Time at which the hammer face first reaches the bed top (interpolated); NaN if never."""
+    return first_below(time, hammer_y, y_top0)
 
 
 def _front_one(gy, gu, gm, yh, ya, thr, layer):
@@ -191,18 +196,6 @@ def steady_front(depth0, tpass, H0, tol, lo=0.15, hi=0.85):
     if not out["steady"]:
         out["us"] = NAN
     return out
-
-
-def arrival_time(time, y_f, y_reach):
-    """First time the front height y_f comes down to ``y_reach`` (interpolated); NaN if never."""
-    below = np.flatnonzero(y_f <= y_reach)
-    if below.size == 0:
-        return NAN
-    k = below[0]
-    if k == 0:
-        return float(time[0])
-    y0, y1 = y_f[k - 1], y_f[k]
-    return float(time[k - 1] + (y0 - y_reach) / (y0 - y1) * (time[k] - time[k - 1]))
 
 
 def first_rise(t, comp, frac=0.1):

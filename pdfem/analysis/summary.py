@@ -91,8 +91,8 @@ def compute(run):
     # Arrival at the bottom: the fitted front at H0, the detected front at the lowest layer's
     # centre, the anvil gauge's rise
     reach = geo["y_bottom0"] + 0.5 * diam
-    arr_front, arr_pre = fr.arrival_time(t, fp["y_f"], reach), fr.arrival_time(t, pp["y_f"],
-                                                                                 reach)
+    arr_front, arr_pre = fr.first_below(t, fp["y_f"], reach), fr.first_below(t, pp["y_f"],
+                                                                               reach)
     hg, ag = run.gauges[sh["hammer_gauge"]], run.gauges[sh["anvil_gauge"]]
     hcomp, acomp = -hg["stress"][:, 1], -ag["stress"][:, 1]
     arr_fit = fit["t0"] + H0 / us if us > 0 else NAN

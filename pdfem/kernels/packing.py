@@ -16,10 +16,9 @@ max over n of (n . d - s_j h_j(-n)) / h_i(n). A wall x = x0 (and the others) all
 s <= (c_x - x0) / h(-e_x). Everything here is exact arithmetic on the vertices (no
 tolerance), so the packing never overlaps its own test.
 
-The cell list: grain i is in cell ``cell[i]`` of an nx by ny grid of side ``h`` over the box,
-items of cell k in ``items[start[k]:start[k+1]]``. A grain's neighbours are found in the 3 x 3
-cells around its (possibly stale) cell; the caller keeps h >= 2 R_max + 2 * (the largest move
-since the last rebuild), R the circumradius.
+Neighbours come from a cell list (pdfem.kernels.cell_list): a grain's are in the 3 x 3 cells
+around its (possibly stale) cell; the caller keeps the cell side h >= 2 R_max + 2 * (the
+largest move since the last rebuild), R the circumradius.
 """
 
 import math
@@ -27,7 +26,17 @@ import math
 import numpy as np
 from numba import njit
 
+from pdfem.kernels.cell_list import around
 from pdfem.kernels.polygon import slab_area
+
+
+@njit(cache=True)
+def _reach(v, nx, ny):
+    """max over the vertices v of -(n . v): the support of -K in the direction n."""
+    h = -math.inf
+    for m in range(v.shape[0]):
+        h = max(h, -(nx * v[m, 0] + ny * v[m, 1]))
+    return h
 
 
 @njit(cache=True)
@@ -39,32 +48,17 @@ def pair_limit(cxi, cyi, vi, cxj, cyj, vj, sj):
     dx, dy = cxj - cxi, cyj - cyi
     ni, nj = vi.shape[0], vj.shape[0]
     g = -math.inf
-    # Edge normals of K_i: h_i(n) is the offset of the edge
+    # Edge normals n of K_i (h_i(n) the edge's offset), then -m for the normals m of K_j
     for k in range(ni):
         k1 = k + 1 if k + 1 < ni else 0
         nx, ny = vi[k1, 1] - vi[k, 1], vi[k, 0] - vi[k1, 0]
-        hi = nx * vi[k, 0] + ny * vi[k, 1]
-        hj = -math.inf
-        for m in range(nj):
-            p = -(nx * vj[m, 0] + ny * vj[m, 1])
-            if p > hj:
-                hj = p
-        t = (nx * dx + ny * dy - sj * hj) / hi
-        if t > g:
-            g = t
-    # Edge normals of -K_j: -m for each outward normal m of K_j
+        g = max(g, (nx * dx + ny * dy - sj * _reach(vj, nx, ny))
+                / (nx * vi[k, 0] + ny * vi[k, 1]))
     for k in range(nj):
         k1 = k + 1 if k + 1 < nj else 0
         mx, my = vj[k1, 1] - vj[k, 1], vj[k, 0] - vj[k1, 0]
-        hj = mx * vj[k, 0] + my * vj[k, 1]
-        hi = -math.inf
-        for m in range(ni):
-            p = -(mx * vi[m, 0] + my * vi[m, 1])
-            if p > hi:
-                hi = p
-        t = (-(mx * dx + my * dy) - sj * hj) / hi
-        if t > g:
-            g = t
+        g = max(g, (-(mx * dx + my * dy) - sj * (mx * vj[k, 0] + my * vj[k, 1]))
+                / _reach(vi, mx, my))
     return g
 
 
@@ -78,17 +72,11 @@ def pair_scale(cxi, cyi, vi, cxj, cyj, vj):
     for k in range(ni):
         k1 = k + 1 if k + 1 < ni else 0
         nx, ny = vi[k1, 1] - vi[k, 1], vi[k, 0] - vi[k1, 0]
-        hj = -math.inf
-        for m in range(nj):
-            hj = max(hj, -(nx * vj[m, 0] + ny * vj[m, 1]))
-        g = max(g, (nx * dx + ny * dy) / (nx * vi[k, 0] + ny * vi[k, 1] + hj))
+        g = max(g, (nx * dx + ny * dy) / (nx * vi[k, 0] + ny * vi[k, 1] + _reach(vj, nx, ny)))
     for k in range(nj):
         k1 = k + 1 if k + 1 < nj else 0
         mx, my = vj[k1, 1] - vj[k, 1], vj[k, 0] - vj[k1, 0]
-        hi = -math.inf
-        for m in range(ni):
-            hi = max(hi, -(mx * vi[m, 0] + my * vi[m, 1]))
-        g = max(g, -(mx * dx + my * dy) / (hi + mx * vj[k, 0] + my * vj[k, 1]))
+        g = max(g, -(mx * dx + my * dy) / (_reach(vi, mx, my) + mx * vj[k, 0] + my * vj[k, 1]))
     return g
 
 
@@ -114,24 +102,6 @@ def rotate_into(base, angle, out):
 
 
 @njit(cache=True)
-def build_cells(cx, cy, x0, y0, h, nx, ny, cell, start, items):
-    """Counting sort of the grains into the cell grid (fills cell, start (ncell+1), items)."""
-    n = cx.shape[0]
-    start[:] = 0
-    for i in range(n):
-        ix = min(max(int((cx[i] - x0) / h), 0), nx - 1)
-        iy = min(max(int((cy[i] - y0) / h), 0), ny - 1)
-        cell[i] = ix * ny + iy
-        start[cell[i] + 1] += 1
-    for k in range(nx * ny):
-        start[k + 1] += start[k]
-    fill = start[:-1].copy()
-    for i in range(n):
-        items[fill[cell[i]]] = i
-        fill[cell[i]] += 1
-
-
-@njit(cache=True)
 def _limit_at(i, cxi, cyi, vi, cx, cy, verts, rad, scale, s_stop, box, cell, start, items,
               nx, ny):
     """Largest scale of grain i placed at (cxi, cyi) with vertices vi against the walls and
@@ -140,23 +110,22 @@ def _limit_at(i, cxi, cyi, vi, cx, cy, verts, rad, scale, s_stop, box, cell, sta
     best = wall_scale(cxi, cyi, vi, box[0], box[1], box[2], box[3])
     if best <= s_stop:
         return best
-    ix, iy = cell[i] // ny, cell[i] % ny
-    for ax in range(max(ix - 1, 0), min(ix + 2, nx)):
-        for ay in range(max(iy - 1, 0), min(iy + 2, ny)):
-            k = ax * ny + ay
-            for q in range(start[k], start[k + 1]):
-                j = items[q]
-                if j == i:
-                    continue
-                # Circumscribed circles: the limit is at least (|d| - s_j R_j) / R_i
-                d = math.hypot(cx[j] - cxi, cy[j] - cyi)
-                if d - scale[j] * rad[j] >= best * rad[i]:
-                    continue
-                lim = pair_limit(cxi, cyi, vi, cx[j], cy[j], verts[j], scale[j])
-                if lim < best:
-                    best = lim
-                    if best <= s_stop:
-                        return best
+    cells = np.empty(9, np.int64)
+    for m in range(around(cell[i], nx, ny, cells)):
+        k = cells[m]
+        for q in range(start[k], start[k + 1]):
+            j = items[q]
+            if j == i:
+                continue
+            # Circumscribed circles: the limit is at least (|d| - s_j R_j) / R_i
+            d = math.hypot(cx[j] - cxi, cy[j] - cyi)
+            if d - scale[j] * rad[j] >= best * rad[i]:
+                continue
+            lim = pair_limit(cxi, cyi, vi, cx[j], cy[j], verts[j], scale[j])
+            if lim < best:
+                best = lim
+                if best <= s_stop:
+                    return best
     return best
 
 
@@ -182,19 +151,17 @@ def min_pair_scale(cx, cy, verts, rad, box, cell, start, items, nx, ny):
     """Smallest common scale at which some grain touches a wall or a neighbour (> 1: the
     grains are disjoint at full size)."""
     best = math.inf
+    cells = np.empty(9, np.int64)
     for i in range(cx.shape[0]):
         best = min(best, wall_scale(cx[i], cy[i], verts[i], box[0], box[1], box[2], box[3]))
-        ix, iy = cell[i] // ny, cell[i] % ny
-        for ax in range(max(ix - 1, 0), min(ix + 2, nx)):
-            for ay in range(max(iy - 1, 0), min(iy + 2, ny)):
-                k = ax * ny + ay
-                for q in range(start[k], start[k + 1]):
-                    j = items[q]
-                    if j <= i or math.hypot(cx[j] - cx[i], cy[j] - cy[i]) >= \
-                            best * (rad[i] + rad[j]):
-                        continue
-                    best = min(best, pair_scale(cx[i], cy[i], verts[i], cx[j], cy[j],
-                                                verts[j]))
+        for m in range(around(cell[i], nx, ny, cells)):
+            k = cells[m]
+            for q in range(start[k], start[k + 1]):
+                j = items[q]
+                if j <= i or math.hypot(cx[j] - cx[i], cy[j] - cy[i]) >= \
+                        best * (rad[i] + rad[j]):
+                    continue
+                best = min(best, pair_scale(cx[i], cy[i], verts[i], cx[j], cy[j], verts[j]))
     return best
 
 

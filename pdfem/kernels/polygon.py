@@ -7,6 +7,8 @@ import math
 import numpy as np
 from numba import njit
 
+from pdfem.kernels.cell_list import around
+
 
 @njit(cache=True)
 def _segment_distance(px, py, ax, ay, bx, by):
@@ -41,28 +43,25 @@ def nearest_gaps(cx, cy, verts, rad, cell, start, items, nx, ny, reach, gap, nea
     n = cx.shape[0]
     pa = np.empty_like(verts[0])
     pb = np.empty_like(verts[0])
+    cells = np.empty(9, np.int64)
     for i in range(n):
         gap[i] = math.inf
         near[i, :] = 0
-        ix, iy = cell[i] // ny, cell[i] % ny
-        for ax in range(max(ix - 1, 0), min(ix + 2, nx)):
-            for ay in range(max(iy - 1, 0), min(iy + 2, ny)):
-                k = ax * ny + ay
-                for q in range(start[k], start[k + 1]):
-                    j = items[q]
-                    if j == i:
-                        continue
-                    if math.hypot(cx[j] - cx[i], cy[j] - cy[i]) - rad[i] - rad[j] > \
-                            max(gap[i], reach[-1]):
-                        continue
-                    for m in range(pa.shape[0]):
-                        pa[m, 0], pa[m, 1] = cx[i] + verts[i, m, 0], cy[i] + verts[i, m, 1]
-                        pb[m, 0], pb[m, 1] = cx[j] + verts[j, m, 0], cy[j] + verts[j, m, 1]
-                    d = polygon_gap(pa, pb)
-                    gap[i] = min(gap[i], d)
-                    for r in range(reach.shape[0]):
-                        if d < reach[r]:
-                            near[i, r] += 1
+        for c in range(around(cell[i], nx, ny, cells)):
+            k = cells[c]
+            for q in range(start[k], start[k + 1]):
+                j = items[q]
+                if j == i or math.hypot(cx[j] - cx[i], cy[j] - cy[i]) - rad[i] - rad[j] > \
+                        max(gap[i], reach[-1]):
+                    continue
+                for m in range(pa.shape[0]):
+                    pa[m, 0], pa[m, 1] = cx[i] + verts[i, m, 0], cy[i] + verts[i, m, 1]
+                    pb[m, 0], pb[m, 1] = cx[j] + verts[j, m, 0], cy[j] + verts[j, m, 1]
+                d = polygon_gap(pa, pb)
+                gap[i] = min(gap[i], d)
+                for r in range(reach.shape[0]):
+                    if d < reach[r]:
+                        near[i, r] += 1
 
 
 @njit(cache=True)

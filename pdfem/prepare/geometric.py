@@ -34,8 +34,8 @@ import time
 import numpy as np
 
 from pdfem.errors import InputError
+from pdfem.kernels.cell_list import build_cells
 from pdfem.kernels.packing import (
-    build_cells,
     grow_sweep,
     mc_sweep,
     min_pair_scale,

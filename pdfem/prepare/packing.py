@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from pdfem.kernels.packing import build_cells
+from pdfem.kernels.cell_list import build_cells
 from pdfem.kernels.polygon import nearest_gaps, slab_areas
 from pdfem.mesh.ellipse import ellipse_mesh
 

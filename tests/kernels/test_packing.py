@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
+from pdfem.kernels.cell_list import build_cells
 from pdfem.kernels.packing import (
-    build_cells,
     grow_sweep,
     mc_sweep,
     min_pair_scale,

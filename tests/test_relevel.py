@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from pdfem.analysis.runfile import element_areas
+from pdfem.errors import InputError
 from pdfem.mesh.ellipse import _kite_numbering, ellipse_mesh, place
 from pdfem.prepare.bedfile import read_bed, write_bed
 from pdfem.prepare.relevel import refine_nodes, refine_points, relevel_bed
@@ -111,3 +112,22 @@ def test_relevel_bed_round_trip(tmp_path):
               np.zeros((3, 37, 2)), {"level": 2})
     with pytest.raises(SceneError, match="not a multiple"):
         relevel_bed(str(tmp_path / "bed2.h5"), str(tmp_path / "x.h5"), 3)
+
+
+def test_scene_subdivides_a_coarser_bed(tmp_path):
+    """A scene at level 2 loads a level-1 bed by subdividing its meshes in place (the same as
+    relevel_bed writes); a level that is not a multiple of the bed's is refused."""
+    from pdfem.scene import parse_scene
+    from tests.scenes import packaged
+
+    doc = packaged("shot912_small.toml")
+    src = doc["grains_file"]["path"]
+    doc["element"] = {"rule": "1pt", "level": 2}
+    sc = parse_scene(doc, str(tmp_path))
+    relevel_bed(src, str(tmp_path / "l2.h5"), 2, "1pt")
+    _, x2, _, level, _, _ = read_bed(str(tmp_path / "l2.h5"), "l2")
+    assert level == 2 and np.array_equal(sc.grains["nodes"], x2)
+    doc["element"]["level"] = 3
+    doc["grains_file"]["path"] = str(tmp_path / "l2.h5")
+    with pytest.raises(InputError, match="element.level: must be a multiple of 2"):
+        parse_scene(doc, str(tmp_path))

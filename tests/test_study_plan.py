@@ -5,7 +5,7 @@ import math
 from pdfem.study import accuracy as acc
 from pdfem.study.pareto import add_errors, mark_pareto, recommend, recommendation_line
 
-KEYS = ("us", "arrival", "hammer_peak", "packing")
+KEYS = ("us", "arrival", "hammer_stress", "packing")
 
 
 def test_plan_reference_grid_and_axes():

@@ -74,13 +74,18 @@ def snapshots_plot(frames, conn, path, box=None):
     _save(fig, path)
 
 
-def gauges_plot(t, hammer, anvil, path):
+def gauges_plot(t, hammer, anvil, path, width=None):
     """Hammer and anvil gauges: -v_y and -sigma_yy vs time (``hammer``/``anvil``: dicts
-    with ``velocity`` (G, 2) and ``stress`` (G, 4) as stored)."""
+    with ``velocity`` (G, 2), ``stress`` (G, 4) and ``force`` (G, 2) or None as stored);
+    with ``width``, also the contact stress on each face (force over the width: all a rigid
+    piston shows)."""
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 6.0), sharex=True)
-    for name, g, c in (("hammer", hammer, "C0"), ("anvil", anvil, "C3")):
+    for name, g, c, sign in (("hammer", hammer, "C0", 1.0), ("anvil", anvil, "C3", -1.0)):
         a1.plot(t * US, -g["velocity"][:, 1], c, lw=1.0, label=name)
-        a2.plot(t * US, -g["stress"][:, 1] * MPA, c, lw=1.0, label=name)
+        a2.plot(t * US, -g["stress"][:, 1] * MPA, c, lw=1.0, label=f"{name} (elements)")
+        if width and g.get("force") is not None:
+            a2.plot(t * US, sign * g["force"][:, 1] / width * MPA, c, lw=0.8, ls="--",
+                    label=f"{name} face (contact force / width)")
     a1.set_ylabel("-v_y [m/s]")
     a2.set_ylabel("-sigma_yy [MPa] (compression > 0)")
     a2.set_xlabel("t [us]")
@@ -111,9 +116,9 @@ def xt_plot(time, grain_y, y_f, fit, y_top0, hammer_y, anvil_y, path, y_p=None):
 
 def hugoniot_plot(ev, stress, path, snow=None, measured=None, decel=None):
     """Bed stress vs volumetric strain; ``snow``/``measured``: (e_v, stress in Pa) points;
-    ``decel``: optional per-frame stress from the hammer's deceleration."""
+    ``decel``: optional per-frame stress from a free hammer's deceleration."""
     fig, ax = plt.subplots(figsize=(6.0, 4.6))
-    ax.plot(ev, stress * MPA, "C0.-", ms=3, lw=0.8, label="bed (mean of the gauges)")
+    ax.plot(ev, stress * MPA, "C0.-", ms=3, lw=0.8, label="bed (mean of hammer and anvil)")
     if decel is not None:
         ax.plot(ev, decel * MPA, "C1-", lw=0.8, alpha=0.8, label="hammer deceleration m dv/dt")
     if snow is not None and np.all(np.isfinite(snow)):

@@ -111,7 +111,11 @@ def compute(run):
     snow, snow0 = fr.snowplow(up, rho0, rho_s), fr.snowplow(v0, rho0, rho_s)
     comp = cp.compaction(t, run.grain_y, run.grain_mass, run.anvil_y, run.hammer_y,
                          run.grain_top, H0)
-    hug = fr.hugoniot(t, run.hammer_y, run.anvil_y, H0, run.gauge_time, hcomp, acomp, rho0)
+    # The whole bed's Hugoniot from the faces: a driven (rigid) hammer's face stress is the
+    # bed's push on it; a free hammer's, its gauge
+    face = hg["force"][:, 1] / run.width if run.drive["driven"] and hg.get("force") is not None \
+        else hcomp
+    hug = fr.hugoniot(t, run.hammer_y, run.anvil_y, H0, run.gauge_time, face, acomp, rho0)
     # The 1997 report's numbers against the snowplow bound at its own density
     rref, usref = float(sh["reference_density"]), sh["reference_us"]
     rsref = float(sh.get("reference_solid_density", rho_s))
@@ -176,8 +180,8 @@ def compute(run):
                      "crystal": sh.get("crystal_hugoniot")},
         "notes": list(run.notes),
     }
-    hug["stress_deceleration"] = fr.deceleration_stress(t, run.hammer_mean_vy, run.hammer_mass,
-                                                        run.width)
+    hug["stress_deceleration"] = None if run.drive["driven"] else fr.deceleration_stress(
+        t, run.hammer_mean_vy, run.hammer_mass, run.width)
     arrays = {"time": t, "y_f": fp["y_f"], "y_p": pp["y_f"], "y_line": y_line, "fit": fit,
               "precursor_fit": pfit, "geo": geo, "hugoniot": hug, "compaction": comp["strain"]}
     return summary, arrays
@@ -289,7 +293,7 @@ def _figures(run, s, arrays, prefix):
         plots.snapshots_plot(frames, run.conn, prefix + "-snapshots.png",
                              box=run.scene["domain"]["box"])
     plots.gauges_plot(run.gauge_time, run.gauges[sh["hammer_gauge"]],
-                      run.gauges[sh["anvil_gauge"]], prefix + "-gauges.png")
+                      run.gauges[sh["anvil_gauge"]], prefix + "-gauges.png", width=run.width)
     plots.xt_plot(t, run.grain_y, arrays["y_f"], fit, arrays["geo"]["y_top0"], run.hammer_y,
                   run.anvil_y, prefix + "-xt.png", y_p=arrays["y_p"])
     b, sn, h = s["bed"], s["snowplow"], s["shocked"]

@@ -88,12 +88,32 @@ def resolve(doc, base_dir):
         if r["grains"]:
             raise SceneError("grains", "[[grains]] cannot be combined with a bed file in "
                              "grains_file")
-        if rows.level != r["element"]["level"]:
-            raise SceneError("element.level", f"must be {rows.level}, the level the bed file "
-                             f"{rows.name} was meshed at (got {r['element']['level']})")
+        _bed_at_level(rows, r["element"])
     grains, label = grain_arrays(r["grains"], rows, mat_ids)
     check_geometry(r, grains, label)
     return r, grains, mat_ids, label
+
+
+def _bed_at_level(rows, element):
+    """A bed file meshed at level L0 serves any scene whose level is a multiple of L0: its
+    grain meshes (and stored stresses and state, at the scene's rule) are subdivided in place
+    (pdfem.prepare.relevel: the same polygons, finer quads)."""
+    from pdfem.prepare.relevel import RULE_POINTS, refine_nodes, refine_points
+
+    level, level0 = element["level"], rows.level
+    if level % level0:
+        raise SceneError("element.level", f"must be a multiple of {level0}, the level the bed "
+                         f"file {rows.name} was meshed at (got {level})")
+    if level == level0:
+        return
+    a = rows.arrays
+    a["nodes"] = refine_nodes(a["nodes"], level0, level)
+    a["node_v"] = refine_nodes(a["node_v"], level0, level)
+    if "elem_sig" in a:
+        nip = RULE_POINTS[element["rule"]]
+        a["elem_sig"] = refine_points(a["elem_sig"], level0, level, nip)
+        a["elem_mst"] = refine_points(a["elem_mst"], level0, level, nip)
+    rows.level = level
 
 
 def _time_rules(t):

@@ -30,13 +30,15 @@ def _packaged(name):
 
 
 def _shot(size, speed, end_ci, kn0_scale=1.0, end_large=None):
-    """Shot 912 (small bed for ci, the packaged bed for large) with the hammer a free steel
-    plate (the scene's piston condition dropped) at ``speed``; large runs until the front has
-    crossed the bed unless end_large is given."""
+    """Shot 912 (small bed for ci, the packaged bed for large) with the report's grains (6
+    fully integrated quads each) and the hammer a free steel plate (the scene's piston
+    condition dropped) at ``speed``; large runs until the front has crossed the bed unless
+    end_large is given."""
     name = "shot912_small.toml" if size == "ci" else "shot912.toml"
     with open(_packaged(name), "rb") as f:
         doc = tomllib.load(f)
     doc["grains_file"]["path"] = _packaged(doc["grains_file"]["path"])
+    doc["element"] = {"rule": "2x2", "level": 1}
     hammer = doc["shock"]["hammer"]
     doc["bc"] = [b for b in doc["bc"] if b.get("body") != hammer]
     for b in doc["blocks"]:

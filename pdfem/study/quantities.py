@@ -2,12 +2,12 @@
 
 Us and the arrival come from the front fit of the shock analysis
 (:func:`pdfem.analysis.analyse`: the fitted front line reaching the bed bottom); the peak
-stress is the hammer's until that arrival (the impact peak that drives the wave; later the
-reflected wave loads the hammer again and both gauges keep rising as the bed locks up, so a
-maximum over the whole run would measure the end time): the bed's push on a driven hammer
-(contact force over the width; a rigid piston has no stress of its own), the hammer gauge's
-stress on a free one; the packing fraction is the grains' area over the bed's volume at the
-last frame.
+stress is what drives the wave: on a driven hammer (a piston) the bed's push on it, its contact
+force over the width, averaged over the front's fit window (the momentum the wave takes; the
+peak of that force is the impact of single grains on a rigid face); on a free hammer its
+gauge's peak until the arrival (later the reflected wave loads the hammer again and both gauges
+keep rising as the bed locks up, so a maximum over the whole run would measure the end time).
+The packing fraction is the grains' area over the bed's volume at the last frame.
 """
 
 import math
@@ -19,7 +19,7 @@ import numpy as np
 QUANTITIES = (
     ("us", "Us", "front speed Us", "m/s", 1.0),
     ("arrival", "arrival", "arrival of the front at the bottom", "us", 1e6),
-    ("hammer_peak", "peak stress", "peak hammer gauge stress", "MPa", 1e-6),
+    ("hammer_stress", "hammer stress", "stress on the hammer face", "MPa", 1e-6),
     ("packing", "packing", "final packing fraction", "", 1.0),
 )
 
@@ -36,13 +36,10 @@ def final_packing(run):
 
 
 def impact_peak(run, until):
-    """Peak compressive stress on the hammer while the front crosses the bed (samples up to
-    time ``until``; the whole run when ``until`` is NaN): the contact force over the width on
-    a driven hammer, the gauge's -sigma_yy on a free one."""
+    """Peak compressive stress -sigma_yy of the hammer gauge while the front crosses the bed
+    (samples up to time ``until``; the whole run when ``until`` is NaN)."""
     t = run.gauge_time
-    g = run.gauges[run.shock["hammer_gauge"]]
-    driven = run.drive["driven"] and g.get("force") is not None
-    comp = g["force"][:, 1] / run.width if driven else -g["stress"][:, 1]
+    comp = -run.gauges[run.shock["hammer_gauge"]]["stress"][:, 1]
     sel = t <= until if math.isfinite(until) else np.ones(t.shape, bool)
     return float(comp[sel].max()) if sel.any() else math.nan
 
@@ -57,6 +54,8 @@ def measure(run_path, prefix):
     run = read_run(run_path)
     arrival = s["front"]["arrival_fit"]
     arrival = math.nan if arrival is None else float(arrival)
-    vals = {"us": s["front"]["us"], "arrival": arrival,
-            "hammer_peak": impact_peak(run, arrival), "packing": final_packing(run)}
+    driven = s["shocked"]["sigma_source"] == "piston force"
+    stress = s["shocked"]["sigma"] if driven else impact_peak(run, arrival)
+    vals = {"us": s["front"]["us"], "arrival": arrival, "hammer_stress": stress,
+            "packing": final_packing(run)}
     return {k: math.nan if v is None else float(v) for k, v in vals.items()}

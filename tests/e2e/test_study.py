@@ -11,8 +11,8 @@ from tests.e2e.test_cli import pdfem
 from tests.scenes import drifting_grains
 
 COLUMNS = ["run", "axis", "level", "quads_per_grain", "rule", "safety", "kn0_scale", "wall_s",
-           "steps", "us", "arrival", "hammer_peak", "packing", "err_us", "err_arrival",
-           "err_hammer_peak", "err_packing", "err_max", "pareto", "status", "run_file"]
+           "steps", "us", "arrival", "hammer_stress", "packing", "err_us", "err_arrival",
+           "err_hammer_stress", "err_packing", "err_max", "pareto", "status", "run_file"]
 
 
 def test_tiny_accuracy_study_on_2_ranks(tmp_path):

@@ -5,15 +5,20 @@ The shock scene's hammer is driven as a piston at each speed for the snowplow tr
 the runs ``<prefix>-v<speed>.h5`` with their summaries, ``<prefix>.json`` (one row per speed)
 and ``<prefix>.png``: Us-up with the precursor, the snowplow bound and the crystal's Hugoniot;
 stress-density with the same and, with ``--static``, the bed's static compression curve
-(``<prefix>-static.h5``).
+(``<prefix>-static.h5``). ``--level`` meshes the grains at another level than the scene's.
+
+A speed whose run stops on a guard is kept as a marked row (no front, the guard's message)
+and the sweep goes on to the next speed; it then exits with status 3.
 """
 
 import json
 import math
 import os
+import sys
 import tomllib
+from itertools import pairwise
 
-from pdfem.errors import InputError
+from pdfem.errors import InputError, SimulationError
 
 DEFAULT_SPEEDS = "100,200,288,400,500,700,1000"
 
@@ -27,6 +32,8 @@ def add_parser(sub):
                    help=f"piston speeds [m/s], comma separated (default {DEFAULT_SPEEDS})")
     p.add_argument("--static", action="store_true", help="also compress the bed "
                    "quasi-statically and draw its stress-density curve beside the Hugoniot")
+    p.add_argument("--level", type=int, default=None, help="grain mesh level for every run "
+                   "(a multiple of the bed file's; default: the scene's element.level)")
     p.add_argument("-p", "--prefix", default="sweep", help="prefix of the run files, "
                    "<prefix>.json and <prefix>.png (default: sweep)")
     p.add_argument("--force", action="store_true", help="overwrite existing run files")
@@ -59,6 +66,18 @@ def _point(v, s, summary):
             "balance_error": summary["balance_error"], "wall_s": summary["wall_s"]}
 
 
+def _stopped(v, exc, bed, snowplow_us):
+    """The row of a speed whose run stopped on a guard: no front, the guard's message."""
+    return {"velocity": v, "us": None, "us_se": None, "us_fit": None, "steady": False,
+            "steadiness": None, "note": f"run stopped: {exc}", "stopped": str(exc),
+            "precursor": None, "precursor_fit": None, "up": None, "sigma": None,
+            "sigma_source": None, "sigma_bed": None, "rho0": bed["rho0"], "rho1": None,
+            "solid_density": bed["solid_density"], "snowplow_us": snowplow_us,
+            "snowplow_sigma": None, "mass_closure": None, "mass_strain_closure": None,
+            "momentum_closure": None, "crystal_hugoniot": None, "balance_error": None,
+            "wall_s": None, "slowest_us": None}
+
+
 def _f(v, scale=1.0):
     """A number for the log line, or n/a."""
     return "n/a" if v is None or v != v else f"{v * scale:.1f}"
@@ -74,6 +93,14 @@ def run(args):
     path = args.scene or default_scene_path()
     scene = load_scene(path)
     hg.check_scene(scene, path)
+    with open(path, "rb") as fh:
+        doc = tomllib.load(fh)
+    if args.level is not None:
+        if not 1 <= args.level <= 16:
+            raise InputError(f"--level: need a grain mesh level from 1 to 16 (got {args.level})")
+        doc["element"] = dict(doc.get("element", {}), level=args.level)
+        scene = parse_scene(doc, scene.base_dir, name=f"{path} (--level {args.level})",
+                            path=path)
     sh = scene.resolved["shock"]
     H0, phi0, width = hg.bed_figures(scene)
     outs = [f"{args.prefix}-v{v:g}.h5" for v in speeds]
@@ -84,8 +111,6 @@ def run(args):
                   if "summary" not in f]
     for out in files + extra:
         check_output_path(out, args.force, "--prefix")
-    with open(path, "rb") as fh:
-        doc = tomllib.load(fh)
     mat = hg.grain_material(scene.resolved)
     rho_s = sh["solid_density"]
     slowest = [hg.slowest_front(v, phi0 * rho_s, rho_s, mat["bulk"], mat.get("W", 0.0))
@@ -105,12 +130,21 @@ def run(args):
 
     comm = world()
     check_ranks(scene, comm.size)
-    points = []
+    points, stops = [], 0
+    bed = {"rho0": phi0 * rho_s, "solid_density": rho_s}
     for v, sc, out in zip(speeds, docs, outs, strict=True):
         if comm.rank == 0:
             print(f"pdfem sweep: piston at {v:g} m/s for {sc.resolved['time']['end'] * 1e6:.2f}"
                   f" us -> {out}", flush=True)
-        summary = drive(Simulation(sc, comm), out, quiet=True)
+        # A guard stops every rank together: the speed becomes a marked row
+        try:
+            summary = drive(Simulation(sc, comm), out, quiet=True)
+        except SimulationError as exc:
+            stops += 1
+            if comm.rank == 0:
+                points.append(_stopped(v, exc, bed, v / (1.0 - phi0)))
+                print(f"  stopped: {exc}", flush=True)
+            continue
         if comm.rank == 0:
             s = analyse(out, os.path.splitext(out)[0])
             points.append(_point(v, s, summary))
@@ -135,8 +169,11 @@ def run(args):
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         sweep_plot(points, args.prefix + ".png", static=static)
         print(f"pdfem sweep: {args.prefix}.json, {args.prefix}.png", flush=True)
+        if stops:
+            print(f"pdfem sweep: {stops} of {len(speeds)} runs stopped on a guard (marked rows; "
+                  "exit status 3)", file=sys.stderr, flush=True)
     comm.Barrier()
-    return 0
+    return 3 if stops else 0
 
 
 def _static(args, scene, doc, sh, H0, phi0, width, comm):
@@ -172,9 +209,13 @@ def _checks(points):
     every front at or above its snowplow bound."""
     ok = [p for p in points if p["us"] is not None and p["us"] == p["us"]]
     lines = [f"{len(ok)} of {len(points)} speeds have a steady front"]
+    stopped = [p for p in points if p.get("stopped")]
+    if stopped:
+        lines.append("stopped on a guard (no front): " + ", ".join(
+            f"{p['velocity']:g} m/s" for p in stopped))
     ok.sort(key=lambda p: p["up"])
-    us_up = all(b["us"] > a["us"] for a, b in zip(ok, ok[1:]))
-    sig_rho = all(b["sigma"] > a["sigma"] and b["rho1"] > a["rho1"] for a, b in zip(ok, ok[1:]))
+    us_up = all(b["us"] > a["us"] for a, b in pairwise(ok))
+    sig_rho = all(b["sigma"] > a["sigma"] and b["rho1"] > a["rho1"] for a, b in pairwise(ok))
     lines.append(f"Us rises with up: {'yes' if us_up else 'no'}; stress rises with density: "
                  f"{'yes' if sig_rho else 'no'}")
     below = [p for p in ok if not p["us"] >= p["snowplow_us"]]

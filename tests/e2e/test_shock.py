@@ -226,3 +226,36 @@ def test_bad_sweep_and_analyse_input(tmp_path, args, msg):
     p = pdfem(args, tmp_path)
     assert p.returncode == 2 and msg in p.stderr, p.stderr
     assert len(p.stderr.strip().splitlines()) == 1
+
+
+def test_sweep_marks_a_stopped_run_and_goes_on(small_bed, tmp_path):
+    """Every speed whose run fails a guard (here an energy drift limit no run can meet) is a
+    marked row with the guard's message, the sweep goes on to the next speed, writes its table
+    and plot and exits 3; ``--level 1`` meshes the grains with the bed file's 6 quads."""
+    doc = small_shock(small_bed)
+    doc["guards"] = {"energy_drift": 1.0e-12}
+    write_scene(tmp_path / "s.toml", doc)
+    p = pdfem(["sweep", "s.toml", "--velocities", "250,500", "--level", "1", "-p", "sw"],
+              tmp_path, ranks=2)
+    assert p.returncode == 3, p.stderr
+    assert "2 of 2 runs stopped on a guard" in p.stderr
+    pts = json.loads((tmp_path / "sw.json").read_text())["points"]
+    assert [q["velocity"] for q in pts] == [250.0, 500.0]
+    assert all(q["us"] is None and "check energy drift" in q["stopped"] for q in pts)
+    assert all(q["snowplow_us"] > 0 for q in pts)
+    assert (tmp_path / "sw.png").read_bytes()[:4] == b"\x89PNG"
+    with h5py.File(tmp_path / "sw-v250.h5.part") as f:
+        kind, body = f["mesh/body_kind"][:], f["mesh/elem_body"][:]
+    per_grain = np.bincount(body, minlength=kind.size)[kind == 0]
+    assert per_grain.size > 0 and np.all(per_grain == 6)
+
+
+def test_sweep_refuses_a_bad_level(small_bed, tmp_path):
+    """A grain mesh level out of range: one line, exit 2, nothing written."""
+    write_scene(tmp_path / "s.toml", small_shock(small_bed))
+    for level in ("0", "17"):
+        msg = "--level: need a grain mesh level from 1 to 16"
+        p = pdfem(["sweep", "s.toml", "--level", level], tmp_path)
+        assert p.returncode == 2 and msg in p.stderr, p.stderr
+        assert len(p.stderr.strip().splitlines()) == 1
+    assert not list(tmp_path.glob("sweep*"))

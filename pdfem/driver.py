@@ -52,7 +52,11 @@ def _run(sim, out_path, quiet, log):
     if sim.max_steps:
         nframes = min(nframes, sim.max_steps + 2)
     frames, samples = Schedule(interval), Schedule(e_interval)
-    gauges, gsched = Gauges(sim), Schedule(out["gauge_interval"])
+    # Gauge elements: found at t = 0, or the checkpoint's on a restart
+    saved, where = None, None
+    if sim.restarted:
+        saved, where = sim.checkpoint.arrays.get("gauge_sets"), f"--restart: {sim.checkpoint.path}"
+    gauges, gsched = Gauges(sim, saved, where), Schedule(out["gauge_interval"])
     ckpt = Checkpointer(sim, out_path, out)
     writer = RunWriter(out_path, sim, nframes, out["fields"],
                        resume=ckpt.state.get("nframe") if sim.restarted else None)

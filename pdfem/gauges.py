@@ -3,12 +3,15 @@ contact force on their nodes.
 
 A gauge is a set of elements of one body: a block's elements along one side (the hammer's
 bottom row, the chamber bottom's top row, the report's fig. 12), one element of a block, or
-the element that contains a given point at t = 0. Each sample is the area-weighted mean over
-the gauge's elements of the element velocity (mean of its four nodes) and of the Cauchy stress
-(mean over its integration points; xx, yy, xy, zz, tension positive), and the sum over the
-gauge elements' nodes of the contact forces [N/m] (what the bed pushes on a hammer's bottom
-row: a rigid, driven piston has no strain and so no stress to read). Only the rank that owns
-the body contributes (rank 0 for blocks), so a sample is the same on any rank count.
+the element that contains a given point at t = 0. The element sets are fixed when the run
+starts and kept in its checkpoints (:meth:`Gauges.packed`), so a restart on any number of
+ranks samples the same elements, even where a point gauge's point has since left them. Each
+sample is the area-weighted mean over the gauge's elements of the element velocity (mean of
+its four nodes) and of the Cauchy stress (mean over its integration points; xx, yy, xy, zz,
+tension positive), and the sum over the gauge elements' nodes of the contact forces [N/m]
+(what the bed pushes on a hammer's bottom row: a rigid, driven piston has no strain and so no
+stress to read). Only the rank that owns the body contributes (rank 0 for blocks), so a
+sample is the same on any rank count.
 """
 
 import numpy as np
@@ -56,12 +59,40 @@ def _locate(sim, point, where):
     return best
 
 
-class Gauges:
-    """The gauges of a run: element sets, and the samples gathered on rank 0."""
+def unpack_sets(flat, count, where):
+    """Element sets from :meth:`Gauges.packed`: ``count`` pairs (body gid, element indices);
+    InputError naming ``where`` when the array does not hold them."""
+    sets, k = [], 0
+    flat = np.asarray(flat, np.float64).ravel()
+    try:
+        for _ in range(count):
+            gid, n = int(flat[k]), int(flat[k + 1])
+            elems = flat[k + 2:k + 2 + n]
+            if n < 1 or elems.size != n or np.any(elems < 0) or np.any(elems != np.floor(elems)):
+                raise ValueError
+            sets.append((gid, elems.astype(np.int64)))
+            k += 2 + n
+    except (IndexError, ValueError, OverflowError):
+        raise InputError(f"{where}: gauge_sets does not hold the scene's {count} gauges") from None
+    if k != flat.size:
+        raise InputError(f"{where}: gauge_sets does not hold the scene's {count} gauges")
+    return sets
 
-    def __init__(self, sim):
+
+class Gauges:
+    """The gauges of a run: element sets, and the samples gathered on rank 0.
+
+    ``saved``: the packed element sets of a checkpoint (a restart; ``where`` names it in an
+    error); otherwise they are found from the scene in the current (initial) state."""
+
+    def __init__(self, sim, saved=None, where=None):
         r = sim.resolved
-        self.names, self.sets = [], []
+        self.names = [g["name"] for g in r.get("gauges", [])]
+        self.times, self.rows = [], []
+        if saved is not None:
+            self.sets = unpack_sets(saved, len(self.names), where)
+            return
+        self.sets = []
         names = [b["name"] for b in r.get("blocks", [])]
         ng = sim.layout.nbody - len(names)
         for i, g in enumerate(r.get("gauges", [])):
@@ -74,12 +105,16 @@ class Gauges:
             else:
                 gid, le = _locate(sim, g["point"], f"gauges[{i}]")
                 elems = np.array([le], np.int64)
-            self.names.append(g["name"])
             self.sets.append((gid, elems))
-        self.times, self.rows = [], []
 
     def __len__(self):
         return len(self.names)
+
+    def packed(self):
+        """The element sets as one float array (gid, count, elements... per gauge), for a
+        checkpoint."""
+        parts = [np.concatenate([[gid, e.size], e]) for gid, e in self.sets]
+        return np.concatenate(parts).astype(np.float64) if parts else np.zeros(0)
 
     def values(self, sim):
         """(ngauge, NCOL) means at the current state, on every rank (collective)."""

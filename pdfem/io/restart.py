@@ -77,6 +77,7 @@ class Checkpointer:
             if len(gauges):
                 t, h = gauges.history()
                 arrays["gauge_times"], arrays["gauge_rows"] = t, h
+                arrays["gauge_sets"] = gauges.packed()
             state["arrays"] = arrays
         write_checkpoint(self.path, sim, state)
         sim.checkpoint_requested = False

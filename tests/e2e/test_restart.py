@@ -202,3 +202,31 @@ def test_rebalancing_moves_cells_and_keeps_results_bit_identical(tmp_path):
     moved = [ln for ln in p.stdout.splitlines() if "rebalanced" in ln]
     assert moved and int(moved[0].split("rebalanced ")[1].split()[0]) >= 1, p.stdout
     _same(tmp_path / "ref.h5", tmp_path / "rb.h5")
+
+
+def test_point_gauge_keeps_its_element_across_a_restart_on_another_rank_count(tmp_path):
+    """A point gauge samples the element that held its point at t = 0, also after a restart
+    on another number of ranks, when its grain has drifted away from the point: every
+    /gauges dataset of the restarted run equals the uninterrupted run's."""
+    from tests.scenes import drifting_grains
+
+    gauge = '\n[[gauges]]\nname = "p"\npoint = [0.002, 0.0015]\n'
+    out = "\ngauge_interval = 2.0e-7\ncheckpoint_interval = 3.0e-6"
+    scene = drifting_grains(end=4.0e-6, extra=gauge).replace(
+        "interval = 1e-06", "interval = 1e-06" + out)
+    assert "checkpoint_interval" in scene
+    (tmp_path / "g.toml").write_text(scene)
+    p = pdfem(["run", "g.toml", "-o", "ref.h5", "--quiet"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    p = pdfem(["run", "g.toml", "--restart", "ref.h5.ckpt.h5", "-o", "b.h5", "--quiet"],
+              tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    ref, b = datasets(tmp_path / "ref.h5"), datasets(tmp_path / "b.h5")
+    keys = [k for k in ref if k.startswith("gauges/")]
+    assert "gauges/p/elements" in keys and "gauges/p/velocity" in keys
+    for k in keys:
+        assert np.array_equal(ref[k], b[k]), f"{k} differs after the restart"
+    # The gauge's grain has left the point by the checkpoint: a new search would not find it
+    with h5py.File(tmp_path / "ref.h5") as f:
+        v = f["gauges/p/velocity"][:]
+    assert np.all(np.abs(v[:, 0]) * 3.0e-6 > 4.0e-4)

@@ -21,6 +21,7 @@ from pdfem.kernels.cap import (
     cap_initial_state,
     cap_update,
 )
+from pdfem.scene import schema as S
 
 COLUMNS = ("step", "exx", "eyy", "exy", "ezz", "sxx", "syy", "sxy", "szz", "I1", "sqrtJ2",
            "kappa", "epv", "wp")
@@ -31,6 +32,9 @@ CAP_KEYS = {"density": P.RHO, "bulk": P.BULK, "shear": P.SHEAR, "A": P.CAP_A, "B
             "C": P.CAP_C, "D": P.CAP_D, "R": P.CAP_R, "W": P.CAP_W, "kappa0": P.CAP_KAPPA0,
             "tension_cutoff": P.CAP_T, "tol": P.CAP_TOL}
 CAP_OPTIONAL = ("tension_cutoff", "tol")
+# Keys a scene's cap material may hold that this isothermal driver does not use (thermal and
+# temperature-dependence keys): the scene schema's keys of the cap model less the ones above
+IGNORED_KEYS = tuple(k for k in (*S.MATERIAL_COMMON, *S.CAP) if k != "model" and k not in CAP_KEYS)
 
 
 def _number(tbl, key, where):
@@ -46,7 +50,9 @@ def cap_params_from_table(tbl, where="materials.NAME", strict=True):
 
     Keys: model, density, bulk, shear, A, B, C, D, R, W, kappa0 and the optional
     tension_cutoff (default: envelope apex ln(A/C)/B when B, C > 0, else 0) and tol (default
-    1e-8). ``where`` prefixes error messages; ``strict`` rejects keys not listed here.
+    1e-8). The other keys a scene accepts for a cap material (:data:`IGNORED_KEYS`: specific
+    heat, conductivity, expansion, softening) are ignored: the driver is isothermal. ``where``
+    prefixes error messages; ``strict`` rejects keys that are neither.
     Raises InputError('where.KEY: ...') on a missing, mistyped or out-of-range value.
     """
     # Model and key set
@@ -54,7 +60,7 @@ def cap_params_from_table(tbl, where="materials.NAME", strict=True):
         raise InputError(f"{where}.model: expected \"cap\" (got {tbl.get('model')!r})")
     if strict:
         for key in tbl:
-            if key != "model" and key not in CAP_KEYS:
+            if key != "model" and key not in CAP_KEYS and key not in IGNORED_KEYS:
                 raise InputError(f"{where}.{key}: unknown key for model \"cap\"")
     for key in CAP_KEYS:
         if key not in CAP_OPTIONAL and key not in tbl:

@@ -396,6 +396,53 @@ def test_touching_grains_overlap():
     assert geo.first_grain_overlap(c[[0, 2]], ax[:2], np.zeros(2)) is None
 
 
+def _first_of_all_pairs(c, ax, ang):
+    """The first overlapping pair in (i, j) order, testing every pair i < j."""
+    ii, jj = np.triu_indices(c.shape[0], 1)
+    hit = np.flatnonzero(geo.grains_overlap(c, ax, ang, ii, jj))
+    return (int(ii[hit[0]]), int(jj[hit[0]])) if hit.size else None
+
+
+def test_first_overlap_blockwise_is_the_full_search_first_pair():
+    """Blocks of any size find the pair that the test of every pair finds first: sparse sets
+    (the first overlap anywhere, or none), a few big grains among small ones, copies."""
+    rng = np.random.default_rng(5)
+    found = set()
+    for _ in range(150):
+        n = int(rng.integers(2, 90))
+        c = rng.uniform(0.0, rng.uniform(3.0, 40.0), (n, 2))
+        ax = rng.uniform(0.1, 0.7, (n, 2)) * np.where(rng.random((n, 1)) < 0.05, 6.0, 1.0)
+        ang = rng.uniform(0.0, np.pi, n)
+        # Sometimes a copy of an earlier grain further down the list
+        if n > 3 and rng.random() < 0.3:
+            k, m = sorted(rng.choice(n, 2, replace=False))
+            c[m], ax[m], ang[m] = c[k], ax[k], ang[k]
+        want = _first_of_all_pairs(c, ax, ang)
+        found.add(want if want is None else min(want[0], 9))
+        for block in (1, 3, 40, geo._BLOCK_PAIRS):
+            assert geo.first_grain_overlap(c, ax, ang, block_pairs=block) == want, (n, block)
+    # The sets cover no overlap and first overlaps late in the list
+    assert None in found and 9 in found and 0 in found
+
+
+def test_first_overlap_of_coincident_grains_forms_one_block_of_pairs(monkeypatch):
+    """20 000 copies of one grain (2e8 overlapping pairs): the search forms the candidates of
+    one block of grains, finds the first pair in it and stops."""
+    n = 20_000
+    c, ax, ang = np.full((n, 2), 0.5), np.tile([1e-3, 6e-4], (n, 1)), np.full(n, 0.3)
+    formed = []
+    real = geo.BoxGrid.pairs
+
+    def counting(grid, entries, start, stop):
+        i, j = real(grid, entries, start, stop)
+        formed.append(i.size)
+        return i, j
+
+    monkeypatch.setattr(geo.BoxGrid, "pairs", counting)
+    assert geo.first_grain_overlap(c, ax, ang) == (0, 1)
+    assert len(formed) == 1 and n - 1 <= formed[0] <= geo._BLOCK_PAIRS
+
+
 def test_validation_timing_1e5_grains(tmp_path, capsys):
     """Prints the time to load and validate a hexagonal bed of ~1e5 ellipses (not asserted)."""
     rng = np.random.default_rng(1)

@@ -14,6 +14,7 @@ import h5py
 import numpy as np
 
 from pdfem.errors import InputError
+from pdfem.io.runcheck import check_run_file
 
 # Values of the [shock] keys when an older resolved scene lacks them
 SHOCK_DEFAULTS = {"front_fraction": 0.5, "precursor_fraction": 0.05, "steady_tolerance": 0.1,
@@ -158,6 +159,10 @@ def read_run(path):
         except (KeyError, TypeError, tomllib.TOMLDecodeError) as e:
             raise InputError(f"{path}: no readable scene attribute ({e})") from None
         shock = _shock_table(path, scene)
+        # Every dataset read below: numeric, of the layout's shape, ids in range
+        mats = scene.get("materials")
+        check_run_file(f, path, series=True,
+                       n_materials=len(mats) if isinstance(mats, dict) else None)
         try:
             return _read(f, path, scene, shock)
         except KeyError as e:

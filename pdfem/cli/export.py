@@ -153,6 +153,8 @@ def _write_frames(f, fmt, ks, paths):
 def run(args):
     import h5py
 
+    from pdfem.io.runcheck import check_run_file
+
     if not os.path.isfile(args.runfile):
         raise InputError(f"{args.runfile}: no such run file")
     prefix = os.path.splitext(args.runfile)[0] if args.prefix is None else args.prefix
@@ -162,8 +164,8 @@ def run(args):
     except OSError as exc:
         raise InputError(f"{args.runfile}: cannot read: {exc}") from None
     with f:
-        if "frames" not in f or "mesh" not in f or "time" not in f["frames"]:
-            raise InputError(f"{args.runfile}: not a pdfem run file (no /frames or /mesh)")
+        # Every dataset the export reads: numeric, of the layout's shape, ids in range
+        check_run_file(f, args.runfile)
         times = f["frames/time"][...]
         ks = _frames(args.frames, times.shape[0])
         if not ks:

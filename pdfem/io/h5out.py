@@ -21,6 +21,7 @@ from mpi4py import MPI
 
 from pdfem import __version__
 from pdfem.io.gather import to_blocks
+from pdfem.io.layout import FRAME_LAYOUT
 from pdfem.io.xdmf import write_xdmf
 from pdfem.store import ranges
 
@@ -35,23 +36,26 @@ def frame_fields(nip, fields):
 
 
 def field_table(sim):
-    """{name: (node|elem, trailing shape, values(nidx, eidx))} of every frame field."""
+    """{name: (node|elem, trailing shape, values(nidx, eidx))} of every frame field, laid out
+    as :data:`pdfem.io.layout.FRAME_LAYOUT` says."""
     s = sim.store
 
     def emean(a, e):
         return a[e].mean(axis=1)
 
-    return {
-        "x": ("node", (2,), lambda n, e: s.x[n]),
-        "v": ("node", (2,), lambda n, e: s.v[n]),
-        "temperature": ("node", (), lambda n, e: s.T[n]),
-        "contact_force": ("node", (2,), lambda n, e: sim.fc[n]),
-        "stress": ("elem", (sim.nip, 4), lambda n, e: s.sig[e]),
-        "stress_cell": ("elem", (4,), lambda n, e: emean(s.sig, e)),
-        "kappa": ("elem", (), lambda n, e: s.mst[e, :, 0].mean(axis=1)),
-        "plastic_strain": ("elem", (4,), lambda n, e: s.mst[e, :, 2:6].mean(axis=1)),
-        "element_temperature": ("elem", (), lambda n, e: s.T[s.conn[e]].mean(axis=1)),
+    values = {
+        "x": lambda n, e: s.x[n],
+        "v": lambda n, e: s.v[n],
+        "temperature": lambda n, e: s.T[n],
+        "contact_force": lambda n, e: sim.fc[n],
+        "stress": lambda n, e: s.sig[e],
+        "stress_cell": lambda n, e: emean(s.sig, e),
+        "kappa": lambda n, e: s.mst[e, :, 0].mean(axis=1),
+        "plastic_strain": lambda n, e: s.mst[e, :, 2:6].mean(axis=1),
+        "element_temperature": lambda n, e: s.T[s.conn[e]].mean(axis=1),
     }
+    return {name: (per, tuple(sim.nip if n is None else n for n in tail), values[name])
+            for name, (per, tail) in FRAME_LAYOUT.items()}
 
 
 class RunWriter:

@@ -4,8 +4,10 @@ A grain is tested as the convex polygon of NPOLY points on its ellipse, inflated
 centre by the relative INFLATE, so grains that touch count as overlapping. Two convex
 polygons are disjoint iff some edge normal of either separates them (separating axis
 theorem). The support of such a polygon has a closed form, so each pair costs NPOLY axes of
-a few flops, vectorised over all candidate pairs; candidates are the pairs whose bounding
-boxes intersect, found with a uniform grid.
+a few flops, vectorised over the candidate pairs; candidates are the pairs whose bounding
+boxes intersect, found with a uniform grid. The search for the first overlap forms them for a
+block of grains at a time and stops at the first overlap found, so a scene of many
+coincident grains is refused at once rather than after forming every one of its pairs.
 """
 
 import numpy as np
@@ -15,6 +17,8 @@ INFLATE = 1e-9
 _STEP = 2.0 * np.pi / NPOLY
 # Pairs tested per vectorised chunk (bounds the temporary arrays to a few MB each)
 _CHUNK = 8192
+# Candidate pairs formed per block of grains by the first-overlap search
+_BLOCK_PAIRS = 8 * _CHUNK
 
 
 def ellipse_aabb(center, axes, angle):
@@ -33,49 +37,75 @@ def first_outside(lo, hi, box):
     return int(bad[0]) if bad.size else -1
 
 
+class BoxGrid:
+    """Boxes [lo, hi] entered in every cell of a uniform grid that they touch.
+
+    Cells are of the median box extent, coarsened while that makes more than 16 entries per
+    box, so a few large grains among many small ones cost little. Entry e (box order) is box
+    ``box[e]`` in cell ``cell[e]``; box b's entries are ``off[b]:off[b + 1]``. The entries
+    sorted by (cell, box) have keys ``key`` = compact cell index x n + box.
+    """
+
+    def __init__(self, lo, hi):
+        n = lo.shape[0]
+        self.n, self.lo, self.hi = n, lo, hi
+        # Cell size and the cell range of every box
+        size = float(np.median(np.max(hi - lo, axis=1)))
+        origin = lo.min(axis=0)
+        while True:
+            c0 = np.floor((lo - origin) / size).astype(np.int64)
+            c1 = np.floor((hi - origin) / size).astype(np.int64)
+            span = c1 - c0 + 1
+            k = span[:, 0] * span[:, 1]
+            if k.sum() <= 16 * n:
+                break
+            size *= 2.0
+        self.origin, self.size, self.ny = origin, size, int(c1[:, 1].max()) + 1
+        # One entry per (box, cell), in box order
+        self.off = np.concatenate([[0], np.cumsum(k)])
+        self.box = np.repeat(np.arange(n), k)
+        r = np.arange(self.box.size) - np.repeat(self.off[:-1], k)
+        self.cell = (c0[self.box, 0] + r // span[self.box, 1]) * self.ny + c0[self.box, 1] \
+            + r % span[self.box, 1]
+        # The entries sorted by (cell, box), as keys compact cell x n + box
+        self.cid = np.unique(self.cell, return_inverse=True)[1].reshape(-1)
+        self.key = np.sort(self.cid * n + self.box)
+
+    def later(self, entries):
+        """(start, stop) in ``key`` of the entries of each entry's cell with a higher box."""
+        c, b = self.cid[entries], self.box[entries]
+        return (np.searchsorted(self.key, c * self.n + b, side="right"),
+                np.searchsorted(self.key, (c + 1) * self.n, side="left"))
+
+    def pairs(self, entries, start, stop):
+        """Pairs (i, j), i < j, sorted by (i, j), of the entries with the later entries of
+        their cell in [start, stop), kept when the boxes intersect (closed), and only in the
+        cell holding the lower-left corner of the intersection (hence once)."""
+        m = stop - start
+        src = np.repeat(entries, m)
+        pos = np.repeat(start, m) + np.arange(src.size) - np.repeat(np.cumsum(m) - m, m)
+        i, j, c = self.box[src], self.key[pos] % self.n, self.cell[src]
+        lo, hi = self.lo, self.hi
+        # Intersecting boxes, counted in one cell only
+        hit = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+        i, j, c = i[hit], j[hit], c[hit]
+        corner = np.floor((np.maximum(lo[i], lo[j]) - self.origin) / self.size).astype(np.int64)
+        once = corner[:, 0] * self.ny + corner[:, 1] == c
+        i, j = i[once], j[once]
+        srt = np.lexsort((j, i))
+        return i[srt], j[srt]
+
+
 def candidate_pairs(lo, hi):
     """Pairs (i, j), i < j, whose boxes [lo, hi] intersect (closed), sorted by (i, j).
 
-    Every box is entered in each cell of a uniform grid that it touches (cells of the median
-    box extent, coarsened while that makes more than 16 entries per box), so a few large
-    grains among many small ones cost little. Pairs are formed within cells and kept only in
-    the cell holding the lower-left corner of their intersection, hence once.
+    Formed within the cells of a :class:`BoxGrid`, each pair once.
     """
-    n = lo.shape[0]
-    if n < 2:
+    if lo.shape[0] < 2:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    # Cell size and the cell range of every box
-    size = float(np.median(np.max(hi - lo, axis=1)))
-    origin = lo.min(axis=0)
-    while True:
-        c0 = np.floor((lo - origin) / size).astype(np.int64)
-        c1 = np.floor((hi - origin) / size).astype(np.int64)
-        span = c1 - c0 + 1
-        k = span[:, 0] * span[:, 1]
-        if k.sum() <= 16 * n:
-            break
-        size *= 2.0
-    ny = int(c1[:, 1].max()) + 1
-    # One entry per (box, cell), sorted by cell
-    g = np.repeat(np.arange(n), k)
-    r = np.arange(g.size) - np.repeat(np.cumsum(k) - k, k)
-    cell = (c0[g, 0] + r // span[g, 1]) * ny + c0[g, 1] + r % span[g, 1]
-    order = np.argsort(cell, kind="stable")
-    cell, g = cell[order], g[order]
-    # Each entry pairs with the later entries of its cell
-    m = np.searchsorted(cell, cell, side="right") - np.arange(cell.size) - 1
-    src = np.repeat(np.arange(cell.size), m)
-    dst = src + 1 + np.arange(src.size) - np.repeat(np.cumsum(m) - m, m)
-    i, j, c = g[src], g[dst], cell[src]
-    # Intersecting boxes, counted in one cell only
-    hit = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
-    i, j, c = i[hit], j[hit], c[hit]
-    corner = np.floor((np.maximum(lo[i], lo[j]) - origin) / size).astype(np.int64)
-    once = corner[:, 0] * ny + corner[:, 1] == c
-    i, j = i[once], j[once]
-    i, j = np.minimum(i, j), np.maximum(i, j)
-    srt = np.lexsort((j, i))
-    return i[srt], j[srt]
+    grid = BoxGrid(lo, hi)
+    entries = np.arange(grid.box.size)
+    return grid.pairs(entries, *grid.later(entries))
 
 
 def polygon_support(axes, angle, n):
@@ -124,17 +154,37 @@ def grains_overlap(center, axes, angle, i, j):
     return out
 
 
-def first_grain_overlap(center, axes, angle):
-    """The first overlapping pair (i, j), i < j, in (i, j) order, or None."""
+def first_grain_overlap(center, axes, angle, block_pairs=_BLOCK_PAIRS):
+    """The first overlapping pair (i, j), i < j, in (i, j) order, or None.
+
+    Grains are taken in blocks of consecutive ids holding at most about ``block_pairs``
+    candidate pairs (at least one grain each); a block's candidates (i, j > i) are formed,
+    sorted and tested in order, and the search stops at the first overlap. A block holds every
+    candidate of its grains, so the pair found is the one the search of all pairs finds first.
+    """
+    n = center.shape[0]
+    if n < 2:
+        return None
     lo, hi = ellipse_aabb(center, axes, angle)
     # Inflate the boxes like the polygons so that touching pairs are candidates
     pad = INFLATE * (hi - lo)
-    i, j = candidate_pairs(lo - pad, hi + pad)
-    for k0 in range(0, i.size, _CHUNK):
-        hit = np.nonzero(grains_overlap(center, axes, angle, i[k0:k0 + _CHUNK],
-                                        j[k0:k0 + _CHUNK]))[0]
-        if hit.size:
-            return int(i[k0 + hit[0]]), int(j[k0 + hit[0]])
+    grid = BoxGrid(lo - pad, hi + pad)
+    # Per entry the range of its cell's later boxes; per grain a bound on its candidates
+    start, stop = grid.later(np.arange(grid.box.size))
+    bound = np.concatenate([[0], np.cumsum(np.bincount(grid.box, weights=stop - start,
+                                                       minlength=n))])
+    g0 = 0
+    while g0 < n:
+        g1 = max(g0 + 1, int(np.searchsorted(bound, bound[g0] + block_pairs, side="right")) - 1)
+        e = np.arange(grid.off[g0], grid.off[g1])
+        i, j = grid.pairs(e, start[e], stop[e])
+        # Tested in (i, j) order, a chunk at a time: the first hit is the first pair
+        for k0 in range(0, i.size, _CHUNK):
+            hit = np.nonzero(grains_overlap(center, axes, angle, i[k0:k0 + _CHUNK],
+                                            j[k0:k0 + _CHUNK]))[0]
+            if hit.size:
+                return int(i[k0 + hit[0]]), int(j[k0 + hit[0]])
+        g0 = g1
     return None
 
 

@@ -1,15 +1,19 @@
 """Bad input never hurts, through the real command line.
 
 Every command on a missing file, a file that is not TOML or not HDF5, a truncated HDF5 file,
-a checkpoint of another scene, negative, zero, NaN or huge values, an unknown effect name, an
-output path that cannot be written and an output that exists: exit status 2, one line on
+a checkpoint of another scene, negative, zero, NaN or huge values, an unknown effect name, a
+run file with a dataset of strings, of the wrong shape or with ids out of range, an output
+path that cannot be written and an output that exists: exit status 2, one line on
 stderr naming the file or key, no traceback, and the folder exactly as it was (no file
 added, none changed: nothing overwritten without --force, nothing partial left behind).
 """
 
 import hashlib
 import os
+import shutil
+import tomllib
 
+import h5py
 import numpy as np
 import pytest
 
@@ -24,6 +28,12 @@ SHOCK = shock_scene("none.h5", 1.0e-3, end=2e-7).replace(
     '[grains_file]\npath = "none.h5"\nmaterial = "hmx"\n',
     '[[grains]]\ncenter = [1.5e-4, 3.5e-4]\naxes = [1.0e-4, 1.0e-4]\nmaterial = "hmx"\n'
     '[[grains]]\ncenter = [4.5e-4, 3.5e-4]\naxes = [1.0e-4, 1.0e-4]\nmaterial = "hmx"\n')
+# The shock scene with [heat] and every frame field the run file can hold
+EVERY_FIELD = SHOCK.replace("kappa0 = -1.0e9\n", "kappa0 = -1.0e9\nspecific_heat = 1444.0\n") \
+    .replace("kappa0 = -5.0e9\n", "kappa0 = -5.0e9\nspecific_heat = 450.0\n") \
+    .replace("interval = 5.0e-8\n", "interval = 5.0e-8\nfields = [\"x\", \"v\", \"stress\", "
+             "\"temperature\", \"kappa\", \"plastic_strain\", \"element_temperature\", "
+             "\"contact_force\"]\n") + "\n[heat]\n"
 
 
 def _scene(**edits):
@@ -41,6 +51,9 @@ FILES = {
     "other.toml": drifting_grains(n=4, end=1e-7),
     "garbage.toml": "this is = = not [[[ toml\n",
     "prep.toml": prep_scene(),
+    "typo.toml": prep_scene().replace("kappa0 = -1.0e9\n",
+                                      "kappa0 = -1.0e9\nspecfic_heat = 1.0\n"),
+    "fields.toml": EVERY_FIELD,
     "shock.toml": SHOCK,
     "negative.toml": _scene(a=("cell_size = 1.0e-3", "cell_size = -1.0e-3")),
     "zero.toml": _scene(a=("axes = [4.0e-4, 3.0e-4]", "axes = [0.0, 3.0e-4]")),
@@ -63,18 +76,64 @@ FILES = {
 
 @pytest.fixture(scope="module")
 def folder(tmp_path_factory):
-    """The input files, a run file with its checkpoint, a shock run with its summary."""
+    """The input files, a run file with its checkpoint, a shock run with every frame field
+    and its summary, and corrupted copies of that shock run (CORRUPT)."""
     d = tmp_path_factory.mktemp("badin")
     for name, text in FILES.items():
         (d / name).write_text(text)
     (d / "adir").mkdir()
-    for args in (["run", "good.toml", "-o", "good.h5"], ["run", "shock.toml", "-o", "sh.h5"]):
+    for args in (["run", "good.toml", "-o", "good.h5"], ["run", "fields.toml", "-o", "sh.h5"]):
         p = pdfem(args + ["--quiet"], d)
         assert p.returncode == 0, p.stderr
     for src, dst in (("good.h5", "trunc.h5"), ("good.h5.ckpt.h5", "trunc.ckpt.h5")):
         data = (d / src).read_bytes()
         (d / dst).write_bytes(data[: len(data) // 2])
+    for name, edit in CORRUPT.items():
+        shutil.copy(d / "sh.h5", d / name)
+        with h5py.File(d / name, "r+") as f:
+            edit(f)
     return d
+
+
+def _replace(f, name, data):
+    """Dataset ``name`` of the open file f replaced by ``data``."""
+    del f[name]
+    f[name] = data
+
+
+def _strings(f, name):
+    """Dataset ``name`` as the text of its numbers (bytes, as h5py stores str arrays)."""
+    _replace(f, name, np.array([str(v) for v in f[name][()].ravel()], dtype="S").reshape(
+        f[name].shape))
+
+
+def _conn_past(f):
+    """One node id of /mesh/conn past the last node."""
+    conn = f["mesh/conn"][()]
+    conn[3, 2] = f["mesh/node_body"].shape[0]
+    _replace(f, "mesh/conn", conn)
+
+
+def _set(name, row, value):
+    """An edit setting row ``row`` of dataset ``name`` to ``value``."""
+    def edit(f):
+        f[name][row] = value
+    return edit
+
+
+# Run files corrupted from the shock run: the dataset that each breaks
+CORRUPT = {
+    "time-str.h5": lambda f: _strings(f, "frames/time"),
+    "conn-past.h5": _conn_past,
+    "v-row.h5": lambda f: _replace(f, "frames/v", f["frames/v"][:-1]),
+    "temp-node.h5": lambda f: _replace(f, "frames/temperature", f["frames/temperature"][:, 1:]),
+    "gauge-str.h5": lambda f: _strings(f, "gauges/hammer/stress"),
+    "time-back.h5": _set("frames/time", 2, -1.0),
+    "time-nan.h5": _set("frames/time", 1, np.nan),
+    "body-past.h5": _set("mesh/elem_body", 0, 99),
+    "kind-float.h5": lambda f: _replace(f, "mesh/body_kind", f["mesh/body_kind"][()] * 1.0),
+    "energy-row.h5": lambda f: _replace(f, "energy/total", f["energy/total"][1:]),
+}
 
 
 # (command line, text the one error line must hold)
@@ -126,6 +185,8 @@ CASES = {
                             "nowhere/m.csv"], "--out: "),
     "material existing output": (["material", "prep.toml", "--material", "hmx", "--out",
                                   "keep.csv"], "keep.csv exists"),
+    "material unknown key": (["material", "typo.toml", "--material", "hmx", "--out", "m.csv"],
+                             'typo.toml: materials.hmx.specfic_heat: unknown key for model "cap"'),
     # export
     "export missing": (["export", "absent.h5"], "absent.h5: no such run file"),
     "export not HDF5": (["export", "good.toml"], "good.toml: cannot read"),
@@ -137,12 +198,34 @@ CASES = {
     "export existing output": (["export", "good.h5", "-p", "keep"], "keep-0000.vtu exists"),
     "export over its run file": (["export", "good.h5", "--format", "xdmf", "-p", "good",
                                   "--force"], "good.h5 is the run file"),
+    "export time strings": (["export", "time-str.h5"], "time-str.h5: /frames/time: holds bytes"),
+    "export time strings xdmf": (["export", "time-str.h5", "--format", "xdmf"],
+                                 "time-str.h5: /frames/time: holds bytes"),
+    "export conn past nodes": (["export", "conn-past.h5"],
+                               "conn-past.h5: /mesh/conn: node id "),
+    "export frame missing": (["export", "v-row.h5", "--frames", "0"],
+                             "v-row.h5: /frames/v: shape"),
+    "export node missing": (["export", "temp-node.h5"], "temp-node.h5: /frames/temperature: "),
+    "export time backwards": (["export", "time-back.h5"], "time-back.h5: /frames/time: decreases"),
+    "export time nan": (["export", "time-nan.h5"], "time-nan.h5: /frames/time: not finite"),
+    "export body past": (["export", "body-past.h5"], "body-past.h5: /mesh/elem_body: body id 99"),
+    "export float ids": (["export", "kind-float.h5"], "kind-float.h5: /mesh/body_kind: holds "
+                         "floats, not integer ids"),
     # analyse
     "analyse missing": (["analyse", "absent.h5"], "absent.h5: no such run file"),
     "analyse truncated": (["analyse", "trunc.h5"], "trunc.h5: cannot read"),
     "analyse not a shock run": (["analyse", "good.h5"], "good.h5: no [shock] table"),
     "analyse existing output": (["analyse", "sh.h5"], "sh-summary.json exists"),
     "analyse no folder": (["analyse", "sh.h5", "-p", "nowhere/a"], "nowhere does not exist"),
+    "analyse time strings": (["analyse", "time-str.h5"], "time-str.h5: /frames/time: holds "),
+    "analyse conn past nodes": (["analyse", "conn-past.h5"], "conn-past.h5: /mesh/conn: node"),
+    "analyse frame missing": (["analyse", "v-row.h5"], "v-row.h5: /frames/v: shape"),
+    "analyse node missing": (["analyse", "temp-node.h5"], "temp-node.h5: /frames/temperature"),
+    "analyse gauge strings": (["analyse", "gauge-str.h5"],
+                              "gauge-str.h5: /gauges/hammer/stress: holds bytes"),
+    "analyse time backwards": (["analyse", "time-back.h5"], "/frames/time: decreases at row 2"),
+    "analyse body past": (["analyse", "body-past.h5"], "body-past.h5: /mesh/elem_body: body"),
+    "analyse energy missing": (["analyse", "energy-row.h5"], "energy-row.h5: /energy/total: "),
     # bench
     "bench zero": (["bench", "elements", "--n", "0"], "--n: must be in [1, "),
     "bench huge": (["bench", "contact", "--sizes", "10,1000000000000"], "--sizes: must be in"),
@@ -215,3 +298,62 @@ def test_material_command_knows_the_named_paths():
     from pdfem.cli.material import NAMED_PATHS
 
     assert NAMED_PATHS == material_point.NAMED_PATHS
+
+
+def test_complete_run_files_pass_the_run_file_check(folder):
+    """The checker of analyse and export accepts what the run wrote, every frame field too."""
+    from pdfem.io.layout import FRAME_LAYOUT
+    from pdfem.io.runcheck import check_run_file
+
+    for name, series in (("good.h5", False), ("sh.h5", True)):
+        with h5py.File(folder / name) as f:
+            got = check_run_file(f, name, series=series, n_materials=2)
+            want = (f["frames/time"].shape[0], f["mesh/node_body"].shape[0],
+                    f["mesh/conn"].shape[0])
+            fields = set(f["frames"]) - {"time"}
+        assert got == want and want[0] >= 3
+    assert fields == set(FRAME_LAYOUT)
+
+
+def test_material_accepts_every_material_of_the_packaged_scene(tmp_path):
+    """A scene that run accepts is accepted by material: its thermal keys are ignored."""
+    from pdfem.cli.run import default_scene_path
+    from pdfem.scene import load_scene
+
+    path = default_scene_path()
+    mats = load_scene(path).resolved["materials"]
+    with open(path, "rb") as f:
+        raw = tomllib.load(f)["materials"]
+    # The premise: run accepts the scene, whose cap materials carry thermal keys
+    assert set(mats) == set(raw) and "specific_heat" in raw["hmx"]
+    for name in raw:
+        p = pdfem(["material", str(path), "--material", name, "--out", f"{name}.csv"],
+                  tmp_path, timeout=120)
+        assert p.returncode == 0, p.stderr
+        rows = (tmp_path / f"{name}.csv").read_text().splitlines()
+        assert rows[0].startswith("step,exx") and len(rows) > 50
+    # Every key the scene schema gives a cap material is known to the driver
+    from pdfem.kernels import params as P
+    from pdfem.material_point import cap_params_from_table
+    from pdfem.scene import schema as S
+
+    extra = {k: 1.0e-4 for k in (*S.MATERIAL_COMMON, *S.CAP) if k not in raw["hmx"]}
+    p = cap_params_from_table({**raw["hmx"], **extra}, "materials.hmx")
+    assert "softening" in extra and p[P.RHO] == raw["hmx"]["density"]
+
+
+def test_many_coincident_grains_refused_with_the_first_pair(tmp_path):
+    """20 000 copies of one grain (a grains file): refused at the first pair, at once (the
+    overlap search stops there instead of forming all 2e8 pairs)."""
+    n = 20_000
+    np.savez(tmp_path / "same.npz", x=np.full(n, 3e-3), y=np.full(n, 3e-3),
+             a=np.full(n, 4e-4), b=np.full(n, 3e-4), angle=np.full(n, 0.2))
+    text = drifting_grains(n=1, end=1e-7, out="same.h5")
+    text = text[: text.index("[[grains]]")] + '[grains_file]\npath = "same.npz"\nmaterial = ' \
+        '"grain"\n'
+    (tmp_path / "same.toml").write_text(text)
+    before = _state(tmp_path)
+    p = pdfem(["run", "same.toml"], tmp_path, timeout=60)
+    _one_error_line(p, "same.toml: grains_file: same.npz row 0 (grain 0): overlaps same.npz "
+                    "row 1 (grain 1) at t=0")
+    assert _state(tmp_path) == before

@@ -11,6 +11,7 @@ import importlib
 import os
 import sys
 
+from pdfem import sigterm
 from pdfem.errors import InputError, SimulationError
 
 COMMANDS = ("run", "prepare", "sweep", "analyse", "export", "material", "bench", "study")
@@ -49,6 +50,9 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     try:
         args = _parser().parse_args(argv or ["run"])
+        # Only a run turns a SIGTERM into a checkpoint; any other command dies of it
+        if args.command != "run":
+            sigterm.release()
         mod = importlib.import_module(f"pdfem.cli.{args.command}")
         return mod.run(args) or 0
     except (InputError, SimulationError) as exc:

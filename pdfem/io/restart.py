@@ -12,13 +12,15 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from pdfem import sigterm
 from pdfem.energy import TERMS
 from pdfem.io.checkpoint import write_checkpoint
 
 
 @contextmanager
 def catch_sigterm(sim):
-    """Within the block, SIGTERM asks ``sim`` to stop after the current step."""
+    """Within the block, SIGTERM asks ``sim`` to stop after the current step; one held since
+    the process started (:mod:`pdfem.sigterm`) asks at once."""
     def handler(signum, frame):
         sim.local_stop = 1.0
 
@@ -27,6 +29,9 @@ def catch_sigterm(sim):
     except ValueError:  # not the main thread: leave signals alone
         yield
         return
+    # Read after the handler is in place, so that no signal falls between the two
+    if sigterm.pending():
+        sim.local_stop = 1.0
     try:
         yield
     finally:

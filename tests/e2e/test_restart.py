@@ -5,6 +5,7 @@ equal in every dataset to the run that never stopped (a settling bed: contacts, 
 history, migration).
 """
 
+import json
 import os
 import signal
 import subprocess
@@ -98,6 +99,52 @@ def test_sigterm_checkpoints_and_the_restart_continues_the_run_file(tmp_path, re
               ranks=2)
     assert p.returncode == 0, p.stderr
     _same(reference, tmp_path / "c.h5")
+
+
+def _catches_sigterm(pid):
+    """True once process ``pid`` has a handler for SIGTERM (its SigCgt mask, Linux)."""
+    with open(f"/proc/{pid}/status") as f:
+        mask = next(line for line in f if line.startswith("SigCgt:")).split()[1]
+    return bool(int(mask, 16) >> (signal.SIGTERM - 1) & 1)
+
+
+def test_sigterm_during_start_up_ends_in_a_checkpoint(tmp_path, reference):
+    """A SIGTERM that arrives while the process still imports and sets up (as soon as
+    python -m pdfem holds the signal, long before the first step) ends the run after its
+    first step with a checkpoint and status 0; the restart on 2 ranks ends equal to the
+    uninterrupted run."""
+    scene = _bed(tmp_path, 4000)
+    proc = _start(["run", scene, "-o", "e.h5", "--quiet"], tmp_path)
+    t0 = time.time()
+    while not _catches_sigterm(proc.pid):
+        assert time.time() - t0 < 60 and proc.poll() is None
+        time.sleep(0.001)
+    # Held before numba (and so the solver) is even loaded
+    with open(f"/proc/{proc.pid}/maps") as f:
+        assert "llvmlite" not in f.read()
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    with h5py.File(tmp_path / "e.h5.ckpt.h5") as f:
+        assert json.loads(f.attrs["state"])["nstep"] == 1
+    p = pdfem(["run", scene, "--restart", "e.h5.ckpt.h5", "-o", "e.h5", "--quiet"], tmp_path,
+              ranks=2)
+    assert p.returncode == 0, p.stderr
+    _same(reference, tmp_path / "e.h5")
+
+
+def test_sigterm_ends_a_command_that_runs_no_simulation(tmp_path):
+    """Commands other than run get the default action back: SIGTERM ends them at once."""
+    proc = _start(["study", "convergence"], tmp_path)
+    # Held from the entry point, then released once the command is known
+    for held in (True, False):
+        t0 = time.time()
+        while _catches_sigterm(proc.pid) != held:
+            assert time.time() - t0 < 60 and proc.poll() is None
+            time.sleep(0.001)
+    proc.send_signal(signal.SIGTERM)
+    proc.communicate(timeout=60)
+    assert proc.returncode == -signal.SIGTERM
 
 
 def test_sigkill_of_a_run_checkpointing_every_step_keeps_a_readable_one(tmp_path, reference):

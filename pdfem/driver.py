@@ -59,7 +59,7 @@ def _run(sim, out_path, quiet, log):
     gauges, gsched = Gauges(sim, saved, where), Schedule(out["gauge_interval"])
     ckpt = Checkpointer(sim, out_path, out)
     writer = RunWriter(out_path, sim, nframes, out["fields"],
-                       resume=ckpt.state.get("nframe") if sim.restarted else None)
+                       resume=ckpt.resume() if sim.restarted else None)
     rows, ref = [], None
     start = (sim.nstep, sim.t)
     t0 = time.perf_counter()

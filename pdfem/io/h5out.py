@@ -10,18 +10,27 @@ Layout (everything by global id, so 1-rank and N-rank files compare equal):
     /gauges/NAME/force (G,2) (contact force on the gauge elements' nodes, N/m),
     /gauges/NAME/elements (the gauge's element ids; attribute body) (with [[gauges]])
     attributes: scene (resolved TOML), effects, pdfem version
-The file is written as ``<path>.part`` and renamed to ``<path>`` only when complete.
+The file is written as ``<path>.part`` and renamed to ``<path>`` only when complete; after
+a checkpoint the frames continue in segment files joined at the end (:mod:`pdfem.io.segments`).
 """
 
 import os
 
 import h5py
 import numpy as np
-from mpi4py import MPI
 
 from pdfem import __version__
+from pdfem.errors import InputError
 from pdfem.io.gather import to_blocks
 from pdfem.io.layout import FRAME_LAYOUT
+from pdfem.io.segments import (
+    check_segments,
+    copy_frames,
+    join_path,
+    later_files,
+    segment_path,
+    start_join,
+)
 from pdfem.io.xdmf import write_xdmf
 from pdfem.store import ranges
 
@@ -59,7 +68,8 @@ def field_table(sim):
 
 
 class RunWriter:
-    """Collective writer of frames and the energy series of one run."""
+    """Collective writer of frames and the energy series of one run, the frames in segment
+    files (:mod:`pdfem.io.segments`) closed at each checkpoint."""
 
     def __init__(self, path, sim, nframes, fields=("x", "v", "stress"), resume=None):
         comm = sim.comm
@@ -67,39 +77,45 @@ class RunWriter:
         self.fields = tuple(frame_fields(sim.nip, fields))
         self.tmp = path + ".part"
         self.nframes_max = nframes
-        self.resumed = False
-        if resume is not None and self._reopen(sim, resume):
-            return
-        self.f = h5py.File(self.tmp, "w", driver="mpio", comm=comm)
-        layout = sim.layout
-        self.nn_tot, self.ne_tot = layout.nnode, layout.nelem
-        f = self.f
-        self._attrs(sim)
-        # Static mesh description (written by rank 0: it is known to every rank)
-        mesh = f.create_group("mesh")
-        dsets = {
-            "node_body": mesh.create_dataset("node_body", (self.nn_tot,), "i8"),
-            "conn": mesh.create_dataset("conn", (self.ne_tot, 4), "i8"),
-            "elem_body": mesh.create_dataset("elem_body", (self.ne_tot,), "i8"),
-            "elem_material": mesh.create_dataset("elem_material", (self.ne_tot,), "i4"),
-            "body_kind": mesh.create_dataset("body_kind", (layout.nbody,), "i1"),
-        }
-        fr = f.create_group("frames")
-        # Frame datasets hold at most nframes; they are cut to the frames written at close
+        self.nn_tot, self.ne_tot = sim.layout.nnode, sim.layout.nelem
         table = field_table(sim)
-        shapes = {name: ((self.nn_tot,) if kind == "node" else (self.ne_tot,)) + shp
-                  for name, (kind, shp, _) in table.items()}
+        self.shapes = {name: ((self.nn_tot,) if kind == "node" else (self.ne_tot,)) + shp
+                       for name, (kind, shp, _) in table.items() if name in self.fields}
+        # Closed segments as [first frame, count]; the open one's index and first frame
+        self.segments, self.f = [], None
+        self.seg_first, self.nframe = 0, 0
+        self.resumed = False
+        if resume is not None and self._resume(sim, *resume):
+            return
+        self._open_segment(0)
+        self._attrs(sim)
+        layout = sim.layout
+        # Static mesh description (written by rank 0: it is known to every rank)
+        mesh = self.f.create_group("mesh")
+        dsets = {name: mesh.create_dataset(name, shp, dt)
+                 for name, (shp, dt) in self._mesh_shapes(layout).items()}
+        self._write_mesh(sim, dsets)
+
+    def _mesh_shapes(self, layout):
+        """{name: (shape, dtype)} of the /mesh datasets."""
+        return {"node_body": ((self.nn_tot,), "i8"), "conn": ((self.ne_tot, 4), "i8"),
+                "elem_body": ((self.ne_tot,), "i8"), "elem_material": ((self.ne_tot,), "i4"),
+                "body_kind": ((layout.nbody,), "i1")}
+
+    def _open_segment(self, i):
+        """Create segment ``i`` with empty frame datasets; its first frame is the next one."""
+        self.f = h5py.File(segment_path(self.tmp, i), "w", driver="mpio", comm=self.comm)
+        fr = self.f.create_group("frames")
         # Parallel HDF5 allocates chunked datasets at once: start small, grow by doubling
-        cap = min(nframes, 8)
+        cap = max(1, min(self.nframes_max - self.nframe, 8))
         self.time = fr.create_dataset("time", (cap,), "f8", maxshape=(None,))
         self.dsets = {}
         for name in self.fields:
-            shp = shapes[name]
+            shp = self.shapes[name]
             self.dsets[name] = fr.create_dataset(name, (cap,) + shp, "f8",
                                                  maxshape=(None,) + shp,
                                                  chunks=(1,) + tuple(max(1, n) for n in shp))
-        self.nframe = 0
-        self._write_mesh(sim, dsets)
+        self.seg_first = self.nframe
 
     def _attrs(self, sim):
         f = self.f
@@ -108,28 +124,30 @@ class RunWriter:
         f.attrs["pdfem_version"] = __version__
         f.attrs["nranks"] = self.comm.size
 
-    def _reopen(self, sim, nframe):
-        """Continue ``<path>.part`` after a restart: keep its first ``nframe`` frames.
-
-        Returns False (the caller starts a new file) when the file is missing or unreadable,
-        e.g. torn by a process killed in the middle of a write.
-        """
-        ok = os.path.exists(self.tmp)
-        if ok:
-            try:
-                f = h5py.File(self.tmp, "r+", driver="mpio", comm=self.comm)
-            except OSError:
-                ok = False
-        ok = self.comm.allreduce(int(ok), op=MPI.MIN) == 1
-        if not ok:
+    def _resume(self, sim, nframe, segments):
+        """Continue the segments of a checkpoint: check them, delete the later ones; the
+        next frame opens a new segment. Returns False (the caller starts a new run file)
+        when the checkpoint lists no segments or segment 0 is gone (a restart into another
+        run file, or after the run completed); InputError naming a damaged segment."""
+        comm, where = self.comm, None
+        if comm.rank == 0:
+            where = "fresh"
+            if segments and os.path.exists(self.tmp):
+                where = check_segments(self.tmp, segments, self.shapes,
+                                       {k: v[0] for k, v in self._mesh_shapes(
+                                           sim.layout).items()})
+            # Segments after the checkpoint's (torn or not) are not part of the run
+            stale = {None: len(segments), "fresh": 1}.get(where)
+            for name in later_files(self.tmp, stale) if stale is not None else ():
+                os.remove(name)
+        where = comm.bcast(where, root=0)
+        if where == "fresh":
             return False
-        self.f = f
-        self.nn_tot, self.ne_tot = sim.layout.nnode, sim.layout.nelem
-        fr = f["frames"]
-        self.time = fr["time"]
-        self.dsets = {name: fr[name] for name in self.fields}
+        if where is not None:
+            raise InputError(f"--restart: frame segment {where}; restart into another run "
+                             f"file (-o) to start its frames at the checkpoint")
+        self.segments = [list(s) for s in segments]
         self.nframe = int(nframe)
-        self._attrs(sim)
         self.resumed = True
         return True
 
@@ -163,11 +181,15 @@ class RunWriter:
 
     def write_frame(self, sim):
         """Write the frame fields of every body at the current time (collective)."""
+        if self.f is None:
+            self._open_segment(len(self.segments))
+        # A rollback to before the open segment's first frame: it restarts there
+        self.seg_first = min(self.seg_first, self.nframe)
         nidx, eidx, gn, ge = self._rows(sim)
-        k = self.nframe
+        k = self.nframe - self.seg_first
         if k >= self.time.shape[0]:
             # Collective: every rank writes every frame, so all resize together
-            cap = min(2 * self.time.shape[0], max(self.nframes_max, k + 1))
+            cap = min(2 * self.time.shape[0], max(self.nframes_max - self.seg_first, k + 1))
             self.time.resize((cap,))
             for d in self.dsets.values():
                 d.resize((cap,) + d.shape[1:])
@@ -185,14 +207,73 @@ class RunWriter:
         self.time[k] = sim.t
         self.nframe += 1
 
-    def suspend(self):
-        """Flush and close without finishing: a restart continues this ``.part`` file."""
+    def _cut(self):
+        """Frame datasets of the open segment cut to the frames it holds (collective)."""
+        first = min(self.seg_first, self.nframe)
+        count = self.nframe - first
+        self.time.resize((count,))
+        for d in self.dsets.values():
+            d.resize((count,) + d.shape[1:])
+        return [first, count]
+
+    def close_segment(self):
+        """Close the open segment and add it to :attr:`segments` (collective); the next
+        frame opens a new one. A checkpoint written after this refers to it."""
+        if self.f is None:
+            return
+        seg = self._cut()
         self.f.close()
+        self.f = None
+        self.segments.append(seg)
         self.comm.Barrier()
 
+    def suspend(self):
+        """Close without finishing: a restart continues from the checkpoint's segments."""
+        if self.f is not None:
+            self.f.close()
+            self.f = None
+        self.comm.Barrier()
+
+    def node_field(self, sim, name):
+        """A node frame field of every node, by global id, on rank 0 (None elsewhere)."""
+        nidx, eidx, gn, ge = self._rows(sim)
+        vals = np.asarray(field_table(sim)[name][2](nidx, eidx), np.float64)
+        parts = self.comm.gather((gn, vals), root=0)
+        if self.comm.rank != 0:
+            return None
+        out = np.zeros((self.nn_tot,) + vals.shape[1:])
+        for idx, v in parts:
+            out[idx] = v
+        return out
+
+    def restore_contact_force(self, sim, saved):
+        """Contact forces of this rank's frame rows from a checkpoint's (every node by
+        global id): the frame written at a restart shows the forces of the step before."""
+        if sim.fc.shape[0] and saved is not None and saved.shape == (self.nn_tot, 2):
+            nidx, _, gn, _ = self._rows(sim)
+            sim.fc[nidx] = saved[gn]
+
     def close(self, energy_rows, terms, ok=True, gauges=None):
-        """Write the energy series and gauges (rank 0 holds them), close, rename into place."""
+        """Write the energy series and gauges (rank 0 holds them), close, rename into place.
+        After a checkpoint the segments are joined first (:mod:`pdfem.io.segments`)."""
         comm = self.comm
+        src = None
+        if self.segments:
+            # Every segment closed; segment 0 copied, the later ones' frames copied in
+            self.close_segment()
+            src = join_path(self.tmp)
+            if comm.rank == 0:
+                start_join(self.tmp)
+            comm.Barrier()
+            self.f = h5py.File(src, "r+", driver="mpio", comm=comm)
+            fr = self.f["frames"]
+            self.time, self.dsets = fr["time"], {name: fr[name] for name in self.fields}
+            self.seg_first = 0
+            self._cut()
+            copy_frames(comm, fr, self.tmp, self.segments, self.nframe, self.fields)
+            self.f.attrs["nranks"] = comm.size
+        else:
+            self._cut()
         if gauges is not None and len(gauges):
             self._write_gauges(gauges)
         n = comm.bcast(len(energy_rows) if comm.rank == 0 else None, root=0)
@@ -203,17 +284,15 @@ class RunWriter:
             arr = np.array(energy_rows)
             for i, c in enumerate(cols):
                 ds[c][:] = arr[:, i]
-        self.time.resize((self.nframe,))
-        for d in self.dsets.values():
-            d.resize((self.nframe,) + d.shape[1:])
         self.f.close()
         comm.Barrier()
         if comm.rank == 0:
             if ok:
-                os.replace(self.tmp, self.path)
+                os.replace(src or self.tmp, self.path)
                 write_xdmf(self.path)
-            else:
-                os.remove(self.tmp)
+            # The segments are no longer needed once the run file is in place
+            for name in later_files(self.tmp, 0):
+                os.remove(name)
         comm.Barrier()
 
     def _write_gauges(self, gauges):

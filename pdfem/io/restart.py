@@ -14,7 +14,9 @@ import numpy as np
 
 from pdfem import sigterm
 from pdfem.energy import TERMS
+from pdfem.errors import InputError
 from pdfem.io.checkpoint import write_checkpoint
+from pdfem.io.segments import valid_segments
 
 
 @contextmanager
@@ -66,19 +68,24 @@ class Checkpointer:
         return want
 
     def write(self, frames, samples, gsched, gauges, writer, rows, ref):
-        """Write the checkpoint atomically (collective). The run file is not flushed here
-        (a collective flush of the parallel file between frames desynchronises its metadata
-        in this HDF5 build); a restart keeps its frames up to the checkpoint when it opens,
-        and starts a new file when a kill has torn it."""
+        """Close the frame segment being written, then write the checkpoint atomically
+        (collective): it lists the closed segments, which a kill can no longer tear
+        (:mod:`pdfem.io.segments`)."""
         sim = self.sim
+        writer.close_segment()
         state = {"nframe": writer.nframe, "frames_k": frames.k, "samples_k": samples.k,
                  "gauges_k": gsched.k, "checkpoint_k": self.k, "run_file": writer.tmp,
-                 "contact_cap": sim.contact_cap, "safety": sim.safety,
-                 "dt_retries_left": sim.guards.retries_left}
+                 "segments": writer.segments, "contact_cap": sim.contact_cap,
+                 "safety": sim.safety, "dt_retries_left": sim.guards.retries_left}
+        # The contact forces of the last step, for a frame written at the restart
+        fc = writer.node_field(sim, "contact_force") if "contact_force" in writer.fields \
+            and sim.fc.shape[0] else None
         arrays = {}
         if sim.comm.rank == 0:
             arrays["energy_rows"] = np.array(rows)
             arrays["energy_ref"] = np.array([ref[t] for t in TERMS])
+            if fc is not None:
+                arrays["contact_force"] = fc
             if len(gauges):
                 t, h = gauges.history()
                 arrays["gauge_times"], arrays["gauge_rows"] = t, h
@@ -87,6 +94,15 @@ class Checkpointer:
         write_checkpoint(self.path, sim, state)
         sim.checkpoint_requested = False
         self.last = time.perf_counter()
+
+    def resume(self):
+        """(frame count, closed segments) of the checkpoint for the run file's writer;
+        InputError when its segment list is malformed."""
+        segments = self.state.get("segments", [])
+        if not valid_segments(segments):
+            raise InputError(f"--restart: {self.sim.checkpoint.path} is not a complete pdfem "
+                             f"checkpoint (bad segments entry)")
+        return self.state["nframe"], segments
 
     def restore(self, frames, samples, gsched, gauges, writer, log):
         """Schedules, energy series and gauge histories of the checkpoint; (rows, ref)."""
@@ -100,9 +116,11 @@ class Checkpointer:
                 gauges.times = arrays["gauge_times"].tolist()
                 gauges.rows = list(arrays["gauge_rows"])
         if not writer.resumed:
-            # The run file is gone or torn: a new one starts at the restart time
+            # No segments to continue (another run file, or the run completed): a new run
+            # file starts at the restart time, its first frame with the checkpoint's forces
             if sim.comm.rank == 0:
-                log(f"pdfem: warning: {writer.tmp} is missing or unreadable; frames before "
-                    f"t={sim.t:.6e} s are lost, the new run file starts there")
+                log(f"pdfem: warning: {writer.tmp} is missing; frames before "
+                    f"t={sim.t:.6e} s are not in the new run file, which starts there")
+            writer.restore_contact_force(sim, arrays.get("contact_force"))
             writer.write_frame(sim)
         return rows, ref

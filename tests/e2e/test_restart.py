@@ -277,3 +277,183 @@ def test_point_gauge_keeps_its_element_across_a_restart_on_another_rank_count(tm
     with h5py.File(tmp_path / "ref.h5") as f:
         v = f["gauges/p/velocity"][:]
     assert np.all(np.abs(v[:, 0]) * 3.0e-6 > 4.0e-4)
+
+
+# A run that SIGKILLs itself at a chosen moment: argv[1] the phase, argv[2] the count of
+# that phase's events at which it dies (every rank counts the same collective events)
+KILL_AT = """
+import os
+import signal
+import sys
+
+import h5py
+
+import pdfem.io.h5out as h5out
+import pdfem.io.restart as restart
+from pdfem.cli import main
+
+phase, at = sys.argv[1], int(sys.argv[2])
+seen = [0]
+
+
+def hit():
+    seen[0] += 1
+    if seen[0] == at:
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
+if phase == "frame":
+    # After a field of a frame is gathered: the earlier fields of the frame are written
+    blocks = h5out.to_blocks
+
+    def to_blocks(*args):
+        out = blocks(*args)
+        hit()
+        return out
+
+    h5out.to_blocks = to_blocks
+elif phase == "checkpoint":
+    # Rank 0 writes the checkpoint: its attributes and bodies are in, the file still open
+    create = h5py.Group.create_dataset
+
+    def create_dataset(self, name, *args, **kw):
+        if name == "buffer_sizes" and self.file.filename.endswith(".ckpt.h5.part"):
+            hit()
+        return create(self, name, *args, **kw)
+
+    h5py.Group.create_dataset = create_dataset
+else:
+    # Between the close of a frame segment and the checkpoint that lists it
+    write = restart.write_checkpoint
+
+    def write_checkpoint(*args):
+        hit()
+        return write(*args)
+
+    restart.write_checkpoint = write_checkpoint
+sys.argv[1:3] = []
+sys.exit(main(sys.argv[1:]))
+"""
+
+# Frames every 5e-7 s (33 of them), checkpoints every 2e-6 s (at a frame: both schedules
+# take the first step at or past a multiple), a gauge and the contact forces
+KILL_OUT = ('interval = 5.0e-7\ngauge_interval = 2.5e-7\ncheckpoint_interval = 2.0e-6\n'
+            'fields = ["x", "v", "stress", "contact_force"]')
+KILL_GAUGE = '\n[[gauges]]\nname = "g"\npoint = [0.0008, 0.0003]\n'
+
+
+def _kill_scene(folder, checkpoints=True):
+    out = KILL_OUT if checkpoints else KILL_OUT.replace("\ncheckpoint_interval = 2.0e-6", "")
+    text = settling_bed(n=60, cols=10, end=1.0, partition="rcb").replace(
+        "safety = 0.5", "safety = 0.5\nmax_steps = 1500").replace("interval = 0.25", out)
+    (folder / "k.toml").write_text(text + KILL_GAUGE)
+    return "k.toml"
+
+
+@pytest.fixture(scope="module")
+def kill_reference(tmp_path_factory):
+    """The uninterrupted run of the kill scene without checkpoints (1 rank)."""
+    d = tmp_path_factory.mktemp("kref")
+    p = pdfem(["run", _kill_scene(d, checkpoints=False), "-o", "ref.h5", "--quiet"], d)
+    assert p.returncode == 0, p.stderr
+    return d / "ref.h5"
+
+
+def _frames_in(path):
+    """Frames of a closed segment file (0 when it does not open)."""
+    try:
+        with h5py.File(path) as f:
+            return f["frames/time"].shape[0]
+    except OSError:
+        return 0
+
+
+def _kill_moments():
+    """(ranks, phase, count, restart ranks) of each kill, drawn with a fixed seed: frames
+    after the first checkpoint (4 fields a frame, 4 mesh gathers first; the kill after the
+    second field of the frame), checkpoints after the first."""
+    rng = np.random.default_rng(2024)
+    out = []
+    for ranks, phases in ((1, ("frame", "checkpoint")), (2, ("frame", "checkpoint", "close"))):
+        for phase in phases:
+            if phase == "frame":
+                n = 4 + 4 * int(rng.integers(6, 30)) + 2
+            else:
+                n = int(rng.integers(2, 8))
+            out.append((ranks, phase, n, 3 - ranks))
+    return out
+
+
+@pytest.mark.parametrize("ranks,phase,at,again", _kill_moments())
+def test_sigkill_at_any_moment_keeps_every_frame_up_to_the_checkpoint(
+        tmp_path, kill_reference, ranks, phase, at, again):
+    """SIGKILL during a frame write, during a checkpoint write, and between the close of a
+    frame segment and its checkpoint, on 1 and 2 ranks; the restart on the other rank
+    count ends in a run file equal in every dataset (frames, gauges, energy) to the run
+    that never stopped."""
+    scene = _kill_scene(tmp_path)
+    (tmp_path / "kill.py").write_text(KILL_AT)
+    cmd = [sys.executable, "kill.py", phase, str(at), "run", scene, "-o", "k.h5", "--quiet"]
+    if ranks > 1:
+        cmd = MPIRUN + ["-n", str(ranks)] + cmd
+    p = subprocess.run(cmd, cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(ROOT)),
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode != 0 and not (tmp_path / "k.h5").exists(), p.stderr
+    with h5py.File(tmp_path / "k.h5.ckpt.h5") as f:
+        nseg = len(json.loads(f.attrs["state"]).get("segments", []))
+    # What the kill left, before the restart deletes the segments the checkpoint lacks
+    half_written = (tmp_path / "k.h5.ckpt.h5.part").exists()
+    unlisted = tmp_path / f"k.h5.part.{nseg}"
+    there, closed = unlisted.exists(), unlisted.exists() and _frames_in(unlisted)
+    p = pdfem(["run", scene, "--restart", "k.h5.ckpt.h5", "-o", "k.h5", "--quiet"], tmp_path,
+              ranks=again)
+    assert p.returncode == 0, p.stderr
+    assert "warning" not in p.stdout + p.stderr
+    ref = datasets(kill_reference)
+    assert {"frames/contact_force", "gauges/g/velocity", "energy/kinetic"} <= set(ref)
+    assert ref["frames/time"].shape[0] == 34
+    _same(kill_reference, tmp_path / "k.h5")
+    # The kill landed in the intended phase: a checkpoint half written; a segment closed
+    # that the checkpoint does not list; a frame of the segment after the checkpoint's
+    assert nseg >= 1 and half_written == (phase == "checkpoint")
+    if phase == "close":
+        assert closed
+    if phase == "frame":
+        assert there
+    # The segments are gone once the run file is in place
+    assert sorted(q.name for q in tmp_path.glob("k.h5.part*")) == []
+
+
+def test_restart_into_a_new_run_file_starts_with_the_checkpoints_contact_forces(
+        tmp_path, kill_reference):
+    """A restart into another run file (no segments to continue) starts it with a frame at
+    the checkpoint's time: equal in every field, contact forces included, to the
+    uninterrupted run's frame of that step (the old restart wrote zero forces)."""
+    scene = _kill_scene(tmp_path)
+    p = pdfem(["run", scene, "-o", "a.h5", "--quiet"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    p = pdfem(["run", scene, "--restart", "a.h5.ckpt.h5", "-o", "n.h5", "--quiet"], tmp_path,
+              ranks=2)
+    assert p.returncode == 0, p.stderr
+    assert "n.h5.part is missing" in p.stdout + p.stderr
+    ref, n = datasets(kill_reference), datasets(tmp_path / "n.h5")
+    j = int(np.nonzero(ref["frames/time"] == n["frames/time"][0])[0][0])
+    assert n["frames/time"].shape[0] == ref["frames/time"].shape[0] - j >= 2
+    assert np.abs(n["frames/contact_force"][0]).max() > 0.0
+    for k in ref:
+        if k.startswith("frames/"):
+            assert np.array_equal(ref[k][j:], n[k]), k
+
+
+def test_restart_refuses_a_damaged_segment(tmp_path):
+    """A segment the checkpoint lists, damaged: one line naming the file, exit 2."""
+    scene = _kill_scene(tmp_path)
+    (tmp_path / "kill.py").write_text(KILL_AT)
+    p = subprocess.run([sys.executable, "kill.py", "close", "3", "run", scene, "-o", "k.h5",
+                        "--quiet"], cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(ROOT)),
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == -signal.SIGKILL
+    (tmp_path / "k.h5.part.1").write_bytes(b"not hdf5")
+    p = pdfem(["run", scene, "--restart", "k.h5.ckpt.h5", "-o", "k.h5"], tmp_path)
+    assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1 and "k.h5.part.1" in p.stderr, p.stderr

@@ -6,12 +6,10 @@ pieces, so a process killed at any moment between the open and the close can lea
 that no longer opens, or opens with wrong shapes, and everything in it is lost (the mpio run
 file of this project no longer opened after a kill). Closing the run file at each checkpoint
 and reopening it to append would rely on a kill during a later append leaving the file as it
-was at its last close. A serial test (h5py, a file reopened and killed after 1 to 20 000
-appended frames) did find it so each time, but HDF5 promises nothing of the kind: it has no
-journal, the metadata cache writes entries in place when it evicts them, and the mpio driver
-flushes metadata collectively; one torn append would lose every frame before the checkpoint.
-A collective flush between frames is no remedy either: it desynchronised the metadata of the
-parallel file in this HDF5 build.
+was at its last close, which HDF5 does not promise: it has no journal, the metadata cache
+writes entries in place when it evicts them, and the mpio driver flushes metadata
+collectively; one torn append would lose every frame before the checkpoint. A collective
+flush between frames desynchronises the metadata of the parallel file in this HDF5 build.
 
 So the frames go to segment files. ``<run>.h5.part`` (segment 0) holds the mesh and the
 frames up to the first checkpoint; each checkpoint closes the segment being written and

@@ -26,6 +26,9 @@ from pdfem.scene import schema as S
 COLUMNS = ("step", "exx", "eyy", "exy", "ezz", "sxx", "syy", "sxy", "szz", "I1", "sqrtJ2",
            "kappa", "epv", "wp")
 NAMED_PATHS = ("uniaxial", "hydrostatic", "triaxial", "load-unload")
+# Most increments of one material-point run, and the seconds one takes (measured, one core)
+MAX_INCREMENTS = 10**7
+INCREMENT_S = 3.0e-5
 
 # [materials.NAME] key -> parameter column, for model = "cap"
 CAP_KEYS = {"density": P.RHO, "bulk": P.BULK, "shear": P.SHEAR, "A": P.CAP_A, "B": P.CAP_B,
@@ -208,6 +211,12 @@ def run_path(p, path, nsub, held=None):
     nsub = int(nsub)
     if nsub < 1:
         raise InputError(f"--nsub: must be >= 1 (got {nsub})")
+    # More than MAX_INCREMENTS is a typo, not a material test (refused before any work)
+    total = nsub * path.shape[0]
+    if total > MAX_INCREMENTS:
+        raise InputError(f"--nsub: {nsub} increments x {path.shape[0]} path segment(s) = "
+                         f"{total:.3g} increments (about {total * INCREMENT_S / 3600:.2g} h), "
+                         f"more than {MAX_INCREMENTS:.0e}")
     # Initial state
     sig = np.zeros(4)
     st = np.zeros(CAP_NST)

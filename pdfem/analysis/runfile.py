@@ -156,7 +156,7 @@ def read_run(path):
             if not isinstance(text, str):
                 raise TypeError(f"a {type(text).__name__}, not TOML text")
             scene = tomllib.loads(text)
-        except (KeyError, TypeError, tomllib.TOMLDecodeError) as e:
+        except (KeyError, TypeError, OSError, RuntimeError, tomllib.TOMLDecodeError) as e:
             raise InputError(f"{path}: no readable scene attribute ({e})") from None
         shock = _shock_table(path, scene)
         # Every dataset read below: numeric, of the layout's shape, ids in range
@@ -167,6 +167,9 @@ def read_run(path):
             return _read(f, path, scene, shock)
         except KeyError as e:
             raise InputError(f"{path}: missing dataset or key {e}") from None
+        except (OSError, RuntimeError) as e:
+            # A damaged block of the file (h5py's errors reading it)
+            raise InputError(f"{path}: cannot read the run file ({e})") from None
         except (ValueError, IndexError, TypeError) as e:
             # A dataset of the wrong shape or kind: the file is not a complete run file
             msg = " ".join(str(e).split())

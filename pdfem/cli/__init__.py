@@ -23,6 +23,12 @@ class _Parser(argparse.ArgumentParser):
     def error(self, message):
         raise InputError(f"{self.prog}: {message}")
 
+    def _get_values(self, action, arg_strings):
+        # argparse drops a "--" value (--strain=--) and hands the option an empty list
+        if action.option_strings and action.nargs is None and arg_strings == ["--"]:
+            self.error(f"argument {'/'.join(action.option_strings)}: expected one argument")
+        return super()._get_values(action, arg_strings)
+
 
 def _parser():
     p = _Parser(prog="pdfem", description="Parallel Discrete Finite Element Method for "

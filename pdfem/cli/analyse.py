@@ -40,6 +40,8 @@ def run(args):
     from pdfem.cli.run import check_output_path
     from pdfem.errors import InputError
 
+    if not args.runfile:
+        raise InputError("runfile: empty file name")
     if not os.path.isfile(args.runfile):
         raise InputError(f"{args.runfile}: no such run file")
     prefix = prefix_of(args.runfile) if args.prefix is None else args.prefix

@@ -37,11 +37,23 @@ def _frames(text, n):
     bad = [k for k in ks if not -n <= k < n]
     if bad:
         raise InputError(f"--frames: frame {bad[0]} out of range (the file has {n} frames)")
-    return [k % n for k in ks]
+    # A frame given twice (0,0 or 1,-1 of two frames) is written once
+    return list(dict.fromkeys(k % n for k in ks))
 
 
 def frame_mesh(f, k):
-    """meshio.Mesh of frame k of an open run file."""
+    """meshio.Mesh of frame k of an open run file; InputError where its blocks are damaged."""
+    try:
+        return _frame_mesh(f, k)
+    except (OSError, RuntimeError) as exc:
+        # h5py raises OSError or RuntimeError reading a damaged block
+        msg = " ".join(str(exc).split())
+        raise InputError(f"{f.filename}: cannot read frame {k} of the run file ({msg})") \
+            from None
+
+
+def _frame_mesh(f, k):
+    """The body of :func:`frame_mesh`."""
     import meshio
     import numpy as np
 
@@ -155,6 +167,8 @@ def run(args):
 
     from pdfem.io.runcheck import check_run_file
 
+    if not args.runfile:
+        raise InputError("runfile: empty file name")
     if not os.path.isfile(args.runfile):
         raise InputError(f"{args.runfile}: no such run file")
     prefix = os.path.splitext(args.runfile)[0] if args.prefix is None else args.prefix
@@ -166,7 +180,10 @@ def run(args):
     with f:
         # Every dataset the export reads: numeric, of the layout's shape, ids in range
         check_run_file(f, args.runfile)
-        times = f["frames/time"][...]
+        try:
+            times = f["frames/time"][...]
+        except (OSError, RuntimeError) as exc:
+            raise InputError(f"{args.runfile}: /frames/time: cannot read ({exc})") from None
         ks = _frames(args.frames, times.shape[0])
         if not ks:
             raise InputError(f"{args.runfile}: the run file holds no frames")

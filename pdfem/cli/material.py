@@ -44,14 +44,20 @@ def _material_table(fname, name):
             doc = tomllib.load(f)
     except OSError as exc:
         raise InputError(f"{fname}: cannot read the scene file: {exc.strerror}") from None
-    except UnicodeDecodeError as exc:
-        raise InputError(f"{fname}: cannot read the scene file: {exc}") from None
+    except (UnicodeDecodeError, ValueError) as exc:
+        # ValueError: a NUL byte in the name
+        raise InputError(f"{fname!r}: cannot read the scene file: {exc}") from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{fname}: TOML syntax: {exc}") from None
     mats = doc.get("materials", {})
+    if not isinstance(mats, dict):
+        raise InputError(f"{fname}: materials: must be a table of materials")
     if name not in mats:
         have = ", ".join(sorted(mats)) or "none"
         raise InputError(f"materials.{name}: no such table in {fname} (have: {have})")
+    if not isinstance(mats[name], dict):
+        raise InputError(f"{fname}: materials.{name}: must be a table (got "
+                         f"{type(mats[name]).__name__})")
     return mats[name]
 
 

@@ -1,11 +1,17 @@
 """``pdfem run [scene] [-o out.h5]``: run a scene (the default scene when none is given)."""
 
+import math
 import os
 from importlib import resources
 
 from pdfem.errors import InputError
 
 DEFAULT_SCENE = "shot912.toml"
+# Suffix of an output file while it is written (renamed when complete)
+PART = ".part"
+# Steps beyond which a run is refused unless --allow-huge (a typo in time.end or a tiny
+# stable step: days of wall time even for a few grains)
+MAX_STEPS = 10**9
 
 
 def default_scene_path():
@@ -22,12 +28,16 @@ def add_parser(sub):
     p.add_argument("--quiet", action="store_true", help="no progress or report")
     p.add_argument("--restart", default=None, metavar="CHECKPOINT", help="continue from a "
                    "checkpoint (<run file>.ckpt.h5) of this scene, on any number of ranks")
+    p.add_argument("--allow-huge", action="store_true", help=f"run even when the estimated "
+                   f"number of steps exceeds {MAX_STEPS:.0e}")
 
 
 def check_output_path(path, force, key="output.path"):
     """The output file must be new (or --force), not a folder, and its folder writable."""
     if not path:
         raise InputError(f"{key}: empty file name")
+    if "\0" in path:
+        raise InputError(f"{key}: {path!r}: a file name cannot hold a NUL byte")
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         what = "is not a folder" if os.path.exists(folder) else "does not exist"
@@ -36,8 +46,24 @@ def check_output_path(path, force, key="output.path"):
         raise InputError(f"{key}: folder {folder} is not writable")
     if os.path.isdir(path):
         raise InputError(f"{key}: {path} is a folder, not a file name")
+    # Room for the ".part" suffix of the file being written
+    longest = os.pathconf(folder, "PC_NAME_MAX") - len(PART)
+    if len(os.fsencode(os.path.basename(path))) > longest:
+        raise InputError(f"{key}: {path}: file name longer than {longest} bytes")
     if os.path.lexists(path) and not force:
         raise InputError(f"{key}: {path} exists (use --force to overwrite)")
+
+
+def check_step_count(sim, name, allow_huge=False):
+    """Refuse (InputError naming time.end) a run whose estimated step count, the time left
+    over the first stable step (or time.max_steps when smaller), exceeds MAX_STEPS, unless
+    ``allow_huge``. The step is the global one, so every rank decides alike."""
+    left = (sim.t_end - sim.t) / sim.dt if sim.dt > 0 else math.inf
+    steps = min(left, sim.max_steps - sim.nstep) if sim.max_steps else left
+    if steps > MAX_STEPS and not allow_huge:
+        raise InputError(f"{name}: time.end: about {steps:.3g} steps of {sim.dt:.3g} s to reach "
+                         f"{sim.t_end:g} s, more than {MAX_STEPS:.0e}: shorten time.end, set "
+                         "time.max_steps, or pass --allow-huge if you mean it")
 
 
 def run_outputs(out, scene, plots=None, restart=None):
@@ -77,6 +103,7 @@ def run(args):
     if comm.rank == 0 and not args.quiet:
         print(f"pdfem: {scene.path} on {comm.size} rank(s) -> {out}", flush=True)
     sim = Simulation(scene, comm, restart=args.restart)
+    check_step_count(sim, scene.path, args.allow_huge)
     summary = drive(sim, out, quiet=args.quiet)
     if "shock" in scene.resolved and not summary["stopped"]:
         shock_report(out, summary, comm, args.quiet)

@@ -29,15 +29,24 @@ def check_run_file(f, path, series=False, n_materials=None):
     present), the time series that ``analyse`` reads. ``n_materials`` (the scene's material
     count, when known) bounds /mesh/elem_material. Returns (F, NN, NE).
     """
-    for group in ("frames", "mesh"):
-        if not isinstance(f.get(group), h5py.Group):
-            raise InputError(f"{path}: not a pdfem run file (no /frames or /mesh)")
-    nn, ne = _check_mesh(f, path, n_materials)
-    nf = _check_frames(f, path, nn, ne)
-    if series:
-        _check_gauges(f, path, ne)
-        _check_energy(f, path)
+    try:
+        for group in ("frames", "mesh"):
+            if not isinstance(f.get(group), h5py.Group):
+                raise InputError(f"{path}: not a pdfem run file (no /frames or /mesh)")
+        nn, ne = _check_mesh(f, path, n_materials)
+        nf = _check_frames(f, path, nn, ne)
+        if series:
+            _check_gauges(f, path, ne)
+            _check_energy(f, path)
+    except (OSError, RuntimeError) as exc:
+        # A damaged block of the file (h5py raises OSError or RuntimeError reading it)
+        raise InputError(f"{path}: cannot read the run file ({_one_line(exc)})") from None
     return nf, nn, ne
+
+
+def _one_line(exc):
+    """An exception's message folded onto one line."""
+    return " ".join(str(exc).split())
 
 
 def _dataset(f, name, path):

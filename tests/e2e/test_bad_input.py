@@ -11,7 +11,9 @@ added, none changed: nothing overwritten without --force, nothing partial left b
 import hashlib
 import os
 import shutil
+import subprocess
 import tomllib
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -64,6 +66,8 @@ FILES = {
                         "material = \"grain\"\nvelocity = [0.0, 1.0e300]\n",
     "prep-zero.toml": prep_scene().replace("grains = 8", "grains = 0"),
     "one-cell.toml": _scene(a=("cell_size = 1.0e-3", "cell_size = 0.02")),
+    "steps.toml": _scene(a=("end = 1e-07", "end = 1000.0")),
+    "mat-text.toml": "[materials]\nhmx = \"text\"\n",
     "strains.csv": "exx,eyy,exy,ezz\n-0.01,0,0,0\n",
     "notafolder": "a plain file\n",
     "keep-0000.vtu": "precious\n",
@@ -92,6 +96,9 @@ def folder(tmp_path_factory):
         shutil.copy(d / "sh.h5", d / name)
         with h5py.File(d / name, "r+") as f:
             edit(f)
+    for name, edit in DAMAGED.items():
+        shutil.copy(d / "sh.h5", d / name)
+        edit(d / name)
     return d
 
 
@@ -112,6 +119,20 @@ def _conn_past(f):
     conn = f["mesh/conn"][()]
     conn[3, 2] = f["mesh/node_body"].shape[0]
     _replace(f, "mesh/conn", conn)
+
+
+def _damage(signature, last=False):
+    """An edit (of the file's bytes) spoiling the first or last HDF5 block with that signature."""
+    def edit(path):
+        data = path.read_bytes()
+        k = data.rfind(signature) if last else data.find(signature)
+        assert k >= 0, signature
+        path.write_bytes(data[:k] + b"XXXX" + data[k + 4:])
+    return edit
+
+
+# Run files damaged on disk: the global heap holding the scene text, a group's symbol table
+DAMAGED = {"heap.h5": _damage(b"GCOL"), "table.h5": _damage(b"SNOD", last=True)}
 
 
 def _set(name, row, value):
@@ -165,6 +186,8 @@ CASES = {
                               "trunc.ckpt.h5"),
     "run restart other scene": (["run", "other.toml", "-o", "r.h5", "--restart",
                                  "good.h5.ckpt.h5"], "different scene ([grains] differs"),
+    "run absurdly many steps": (["run", "steps.toml", "-o", "r.h5"],
+                                "steps.toml: time.end: about 4.17e+10 steps of"),
     "run restart run file": (["run", "good.toml", "-o", "r.h5", "--restart", "good.h5"],
                              "good.h5 is not a pdfem checkpoint"),
     # prepare
@@ -174,7 +197,16 @@ CASES = {
     "prepare zero grains": (["prepare", "prep-zero.toml"], "prepare.grains: must be >= 1"),
     "prepare no folder": (["prepare", "prep.toml", "-o", "nowhere/b.h5"], "nowhere"),
     "prepare existing output": (["prepare", "prep.toml", "-o", "keep.h5"], "keep.h5 exists"),
+    "prepare name too long": (["prepare", "prep.toml", "-o", "b" * 300],
+                              "prepare.output: " + "b" * 300 + ": file name longer than"),
     # material
+    "material option without value": (["material", "prep.toml", "--material", "hmx",
+                                       "--strain=--"], "argument --strain: expected one"),
+    "material not a table": (["material", "mat-text.toml", "--material", "hmx"],
+                             "mat-text.toml: materials.hmx: must be a table (got str)"),
+    "material absurd nsub": (["material", "prep.toml", "--material", "hmx", "--nsub",
+                              "1000000000", "--out", "m.csv"],
+                             "--nsub: 1000000000 increments x 2 path segment(s)"),
     "material HDF5 as scene": (["material", "good.h5", "--material", "hmx"], "good.h5"),
     "material unknown": (["material", "prep.toml", "--material", "lead"], "materials.lead"),
     "material nan strain": (["material", "prep.toml", "--material", "hmx", "--strain", "nan",
@@ -211,7 +243,13 @@ CASES = {
     "export body past": (["export", "body-past.h5"], "body-past.h5: /mesh/elem_body: body id 99"),
     "export float ids": (["export", "kind-float.h5"], "kind-float.h5: /mesh/body_kind: holds "
                          "floats, not integer ids"),
+    "export empty name": (["export", ""], "runfile: empty file name"),
     # analyse
+    "analyse damaged heap": (["analyse", "heap.h5", "-p", "a"],
+                             "heap.h5: no readable scene attribute (Unable to read attribute"),
+    "analyse damaged table": (["analyse", "table.h5", "-p", "a"],
+                              "table.h5: cannot read the run file (Can't determine"),
+    "analyse empty name": (["analyse", ""], "runfile: empty file name"),
     "analyse missing": (["analyse", "absent.h5"], "absent.h5: no such run file"),
     "analyse truncated": (["analyse", "trunc.h5"], "trunc.h5: cannot read"),
     "analyse not a shock run": (["analyse", "good.h5"], "good.h5: no [shock] table"),
@@ -277,6 +315,61 @@ def test_more_ranks_than_cells(folder):
     p = pdfem(["run", "one-cell.toml", "-o", "r.h5", "--quiet"], folder, ranks=2, timeout=60)
     _one_error_line(p, "one-cell.toml: domain.cell_size: the cell grid has 1 cell(s)")
     assert _state(folder) == before
+
+
+def _in_process(args, cwd):
+    """``pdfem.cli.main(args)`` in the folder cwd: (exit status, stderr)."""
+    import contextlib
+    import io
+
+    from pdfem.cli import main
+
+    err = io.StringIO()
+    with contextlib.chdir(cwd), contextlib.redirect_stdout(io.StringIO()), \
+            contextlib.redirect_stderr(err):
+        return main(args), err.getvalue()
+
+
+def test_nul_byte_in_a_file_name(folder):
+    """A NUL byte (which no command line can pass, a script can) in an input or output name."""
+    before = _state(folder)
+    for args, text in ((["prepare", "bed\0.toml"], "bed\0.toml: cannot read the scene file"),
+                       (["analyse", "sh.h5", "-p", "a\0b"], "--prefix: 'a\\x00b-summary"),
+                       (["material", "bed\0.toml", "--material", "hmx"],
+                        "'bed\\x00.toml': cannot read the scene file")):
+        status, err = _in_process(args, folder)
+        assert status == 2 and "Traceback" not in err, err
+        lines = err.strip().splitlines()
+        assert len(lines) == 1 and text in lines[0], (text, err)
+    assert _state(folder) == before
+
+
+def test_export_of_a_frame_given_twice(folder, tmp_path):
+    """--frames 0,0 (or 1,-1 naming one frame twice) writes that frame once."""
+    status, err = _in_process(["export", str(folder / "good.h5"), "--frames", "1,0,-1,1",
+                               "-p", "dup"], tmp_path)
+    assert status == 0, err
+    assert sorted(os.listdir(tmp_path)) == ["dup-0000.vtu", "dup-0001.vtu", "dup-0004.vtu"]
+
+
+def test_allow_huge_runs_what_is_refused_without_it(folder, tmp_path):
+    """The 1e12-step scene runs with --allow-huge (until SIGTERM ends it with a checkpoint)."""
+    import signal
+    import sys
+
+    shutil.copy(folder / "steps.toml", tmp_path / "steps.toml")
+    cmd = [sys.executable, "-m", "pdfem", "run", "steps.toml", "-o", "r.h5", "--allow-huge"]
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parents[2]))
+    p = subprocess.Popen(cmd, cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, env=env)
+    # The first step is taken only once the run has passed the step estimate
+    for line in p.stdout:
+        if line.startswith("first step"):
+            break
+    p.send_signal(signal.SIGTERM)
+    out, err = p.communicate(timeout=120)
+    assert p.returncode == 0, err
+    assert (tmp_path / "r.h5.ckpt.h5").exists() and not (tmp_path / "r.h5").exists()
 
 
 def test_a_rank_without_grains_writes_its_share(tmp_path):

@@ -131,9 +131,9 @@ def _scaled(v, k):
 
 
 @st.composite
-def mutants(draw):
-    """(file bytes, what was done) of one mutated scene."""
-    doc = tomllib.loads(BASE)
+def mutants(draw, base=BASE):
+    """(file bytes, what was done) of the scene text ``base`` mutated once."""
+    doc = tomllib.loads(base)
     text = dumps(doc)
     kind = draw(st.sampled_from(["replace", "replace", "scale", "delete", "unknown key",
                                  "unknown table", "truncate", "garbage"]))

@@ -193,7 +193,11 @@ def _mixed_increment(p, sig, st, d, held, target):
             dd = d.copy()
             dd[c] += eps
             jac[:, k] = (_update(p, sig, st, dd)[0][h] - s[h]) / eps
-        d[h] -= np.linalg.solve(jac, r)
+        try:
+            d[h] -= np.linalg.solve(jac, r)
+        except np.linalg.LinAlgError:
+            raise SimulationError("stress-controlled increment: singular Jacobian (the held "
+                                  "stresses do not respond to their strains)") from None
     raise SimulationError(f"stress-controlled increment did not converge (residual "
                           f"{np.abs(r).max():.3g})")
 

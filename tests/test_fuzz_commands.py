@@ -242,7 +242,7 @@ def test_mutated_material_call_runs_or_exits_2(call):
             _no_partial(d, what)
             return
         # A path the model cannot follow ends the point with exit 3, naming the step
-        names = [scene, "--", "materials."] if status == 2 else ["step"]
+        names = [scene, "--", "materials."] if status == 2 else ["step", "increment"]
         _refused_cleanly(status, err, names, what, before, d, codes=(2, 3))
 
 
@@ -452,6 +452,6 @@ def test_odd_command_line_runs_or_exits_2(runs, call):
             return
         codes = (2, 3) if command == "material" else (2,)
         # The message names an input or output path, an option, or the odd value itself
-        names = ["step"] if status == 3 else [a.split("=")[0] for a in args] + \
+        names = ["step", "increment"] if status == 3 else [a.split("=")[0] for a in args] + \
             ["runfile: empty", "scene file", "--prefix", "prepare.output", "required: "]
         _refused_cleanly(status, err, names, what, before, d, codes)

@@ -69,6 +69,14 @@ def _numeric(d, name, path, ids=False):
         raise InputError(f"{path}: /{name}: holds {held}, not {what}")
 
 
+def _floats(d, name, path):
+    """InputError unless dataset d holds floats (what the run writes for a frame field)."""
+    if d.dtype.kind != "f":
+        held = KIND_NAMES.get(d.dtype.kind, f"integers ({d.dtype})" if d.dtype.kind in "iu"
+                              else f"dtype {d.dtype}")
+        raise InputError(f"{path}: /{name}: holds {held}, not floats")
+
+
 def _shaped(d, name, path, want, rows):
     """InputError unless d.shape is ``want`` (None matches any length); ``rows`` says what
     the leading axes count, for the message."""
@@ -148,7 +156,7 @@ def _check_frames(f, path, nn, ne):
             continue
         name = f"frames/{field}"
         d = _dataset(f, name, path)
-        _numeric(d, name, path)
+        _floats(d, name, path)
         rows = nn if per == "node" else ne
         what = "nodes" if per == "node" else "elements"
         _shaped(d, name, path, (nf, rows) + tail, f"{nf} frames of /frames/time by {rows} {what}")

@@ -20,10 +20,16 @@ def prepare(path, out, comm, log=_log):
     if "prepare" not in scene.resolved:
         raise InputError(f"{path}: prepare: the scene has no [prepare] table")
     out = os.path.abspath(out)
-    if scene.resolved["prepare"]["method"] == "geometric":
-        from pdfem.prepare.geometric_bed import prepare_geometric
+    try:
+        if scene.resolved["prepare"]["method"] == "geometric":
+            from pdfem.prepare.geometric_bed import prepare_geometric
 
-        return prepare_geometric(path, scene, out, comm, log)
-    from pdfem.prepare.phases import prepare_rain
+            return prepare_geometric(path, scene, out, comm, log)
+        from pdfem.prepare.phases import prepare_rain
 
-    return prepare_rain(path, scene, out, comm, log)
+        return prepare_rain(path, scene, out, comm, log)
+    except InputError as exc:
+        # The preparation's checks (the bed, the packing, the weight) name the key; add the file
+        if str(exc).startswith(f"{path}: "):
+            raise
+        raise InputError(f"{path}: {exc}") from None

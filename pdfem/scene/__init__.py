@@ -127,7 +127,11 @@ def _check_sizes(r, name):
     if "height" in pr:
         # The most grains a geometric bed of this size can hold (smallest grains)
         x0, _, x1, _ = r["domain"]["box"]
-        small = math.pi * pr["semi_axis"][0] ** 2 * pr["aspect"][0]
+        a = pr["semi_axis"][0]
+        small = math.pi * a * a * pr["aspect"][0]
+        if not math.isfinite(small):
+            raise InputError(f"{name}: prepare.semi_axis: grains of {a:g} m have no finite "
+                             "area")
         most = pr["packing"] * (x1 - x0) * pr["height"] / small
         if not most <= MAX_GRAINS:
             raise InputError(f"{name}: prepare.height: a bed this size could hold {most:.3g} "

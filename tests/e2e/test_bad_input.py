@@ -19,8 +19,9 @@ import h5py
 import numpy as np
 import pytest
 
+from pdfem.scene.toml_out import dumps
 from tests.e2e.test_cli import datasets, pdfem
-from tests.scenes import drifting_grains, prep_scene, shock_scene
+from tests.scenes import drifting_grains, prep_scene, shock_scene, small_prepare
 
 # Two grains, a checkpoint every few steps
 GOOD = drifting_grains(n=2, end=1e-7).replace("interval = 2.5e-08",
@@ -68,6 +69,8 @@ FILES = {
     "one-cell.toml": _scene(a=("cell_size = 1.0e-3", "cell_size = 0.02")),
     "steps.toml": _scene(a=("end = 1e-07", "end = 1000.0")),
     "mat-text.toml": "[materials]\nhmx = \"text\"\n",
+    "prep-vast.toml": dumps(small_prepare(semi_axis=[1.2e296, 1.6e296])),
+    "prep-thin.toml": dumps(small_prepare(height=1.0e-9)),
     "strains.csv": "exx,eyy,exy,ezz\n-0.01,0,0,0\n",
     "notafolder": "a plain file\n",
     "keep-0000.vtu": "precious\n",
@@ -154,6 +157,7 @@ CORRUPT = {
     "body-past.h5": _set("mesh/elem_body", 0, 99),
     "kind-float.h5": lambda f: _replace(f, "mesh/body_kind", f["mesh/body_kind"][()] * 1.0),
     "energy-row.h5": lambda f: _replace(f, "energy/total", f["energy/total"][1:]),
+    "x-int.h5": lambda f: _replace(f, "frames/x", f["frames/x"][()].astype("i1")),
 }
 
 
@@ -197,6 +201,10 @@ CASES = {
     "prepare zero grains": (["prepare", "prep-zero.toml"], "prepare.grains: must be >= 1"),
     "prepare no folder": (["prepare", "prep.toml", "-o", "nowhere/b.h5"], "nowhere"),
     "prepare existing output": (["prepare", "prep.toml", "-o", "keep.h5"], "keep.h5 exists"),
+    "prepare vast grains": (["prepare", "prep-vast.toml"],
+                            "prep-vast.toml: prepare.semi_axis: grains of 1.2e+296 m"),
+    "prepare bed too thin": (["prepare", "prep-thin.toml", "-o", "b.h5"],
+                             "prep-thin.toml: prepare.packing: grain 0 found no place"),
     "prepare name too long": (["prepare", "prep.toml", "-o", "b" * 300],
                               "prepare.output: " + "b" * 300 + ": file name longer than"),
     # material
@@ -249,6 +257,8 @@ CASES = {
                              "heap.h5: no readable scene attribute (Unable to read attribute"),
     "analyse damaged table": (["analyse", "table.h5", "-p", "a"],
                               "table.h5: cannot read the run file (Can't determine"),
+    "analyse integer positions": (["analyse", "x-int.h5"],
+                                  "x-int.h5: /frames/x: holds integers (int8), not floats"),
     "analyse empty name": (["analyse", ""], "runfile: empty file name"),
     "analyse missing": (["analyse", "absent.h5"], "absent.h5: no such run file"),
     "analyse truncated": (["analyse", "trunc.h5"], "trunc.h5: cannot read"),
@@ -341,6 +351,16 @@ def test_nul_byte_in_a_file_name(folder):
         assert status == 2 and "Traceback" not in err, err
         lines = err.strip().splitlines()
         assert len(lines) == 1 and text in lines[0], (text, err)
+    assert _state(folder) == before
+
+
+def test_material_path_the_model_cannot_hold(folder):
+    """Triaxial under tension: the held stresses stop responding; exit 3 with one line."""
+    before = _state(folder)
+    status, err = _in_process(["material", "prep.toml", "--material", "hmx", "--path",
+                               "triaxial", "--strain", "0.005", "--out", "t.csv"], folder)
+    lines = err.strip().splitlines()
+    assert status == 3 and len(lines) == 1 and "singular Jacobian" in lines[0], err
     assert _state(folder) == before
 
 

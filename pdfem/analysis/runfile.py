@@ -108,7 +108,14 @@ def _block_rows(scene, ng, node_body, name, path):
     return nodes[: nx + 1], nodes[-(nx + 1):], nodes
 
 
-def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall):
+def _finite(a, name, k, path):
+    """Frame k of /frames/name, read as a; InputError unless every value is finite."""
+    if not np.isfinite(a).all():
+        raise InputError(f"{path}: /frames/{name}: frame {k} holds a non-finite value")
+    return a
+
+
+def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, path):
     """Per frame: grain centroid y and v_y, hammer face y and v_y, anvil face y, the
     whole hammer's mass-weighted mean y and v_y, and the highest grain node."""
     nf = fr["time"].shape[0]
@@ -120,12 +127,12 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall):
     has_v = "v" in fr
     # One frame at a time keeps the memory to one frame
     for k in range(nf):
-        x = fr["x"][k]
+        x = _finite(fr["x"][k], "x", k, path)
         gy[k] = body_means(x[gmask, 1], w, nb_g, ng)
         top[k] = x[gmask, 1].max()
         hy[k], ay[k], my[k] = x[hammer, 1].mean(), x[anvil, 1].mean(), wh @ x[hall, 1]
         if has_v:
-            v = fr["v"][k]
+            v = _finite(fr["v"][k], "v", k, path)
             gvy[k] = body_means(v[gmask, 1], w, nb_g, ng)
             hvy[k], mvy[k] = v[hammer, 1].mean(), wh @ v[hall, 1]
     t = fr["time"][:]
@@ -198,7 +205,7 @@ def _read(f, path, scene, shock):
     hammer, _, hall = _block_rows(scene, ng, node_body, shock["hammer"], path)
     _, anvil, _ = _block_rows(scene, ng, node_body, shock["anvil"], path)
     t, gy, gvy, hy, hvy, ay, mvy, top = _reduce_frames(f["frames"], node_mass, node_body, ng,
-                                                       hammer, anvil, hall)
+                                                       hammer, anvil, hall, path)
     # Gauge series: every group under /gauges but the time axis
     gauges = {n: {"velocity": g["velocity"][:], "stress": g["stress"][:],
                   "force": g["force"][:] if "force" in g else None}

@@ -158,6 +158,7 @@ CORRUPT = {
     "kind-float.h5": lambda f: _replace(f, "mesh/body_kind", f["mesh/body_kind"][()] * 1.0),
     "energy-row.h5": lambda f: _replace(f, "energy/total", f["energy/total"][1:]),
     "x-int.h5": lambda f: _replace(f, "frames/x", f["frames/x"][()].astype("i1")),
+    "v-nan.h5": _set("frames/v", 2, np.nan),
 }
 
 
@@ -259,6 +260,8 @@ CASES = {
                               "table.h5: cannot read the run file (Can't determine"),
     "analyse integer positions": (["analyse", "x-int.h5"],
                                   "x-int.h5: /frames/x: holds integers (int8), not floats"),
+    "analyse nan velocity": (["analyse", "v-nan.h5"],
+                             "v-nan.h5: /frames/v: frame 2 holds a non-finite value"),
     "analyse empty name": (["analyse", ""], "runfile: empty file name"),
     "analyse missing": (["analyse", "absent.h5"], "absent.h5: no such run file"),
     "analyse truncated": (["analyse", "trunc.h5"], "trunc.h5: cannot read"),

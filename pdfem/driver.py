@@ -9,6 +9,7 @@ import pdfem
 from pdfem.energy import TERMS, balance, balance_scale, fixed_point_terms, global_terms
 from pdfem.errors import SimulationError
 from pdfem.gauges import Gauges
+from pdfem.guards import advice
 from pdfem.io.h5out import RunWriter
 from pdfem.io.restart import Checkpointer, catch_sigterm
 
@@ -218,9 +219,10 @@ def _fail(sim, guards, restore, ckpt, frames, samples, gsched, gauges, writer, r
     with sim.timers.phase("output"):
         ckpt.write(frames, samples, gsched, gauges, writer, rows, ref)
     writer.suspend()
+    help_ = advice(str(exc))
     raise SimulationError(f"{exc}; the last good state (step {sim.nstep}, t={sim.t:.6e} s) "
-                          f"is in {ckpt.path}: change the scene (time.safety, [guards]) and "
-                          f"continue with --restart {ckpt.path}") from None
+                          f"is in {ckpt.path}: change the scene and continue with --restart "
+                          f"{ckpt.path}" + (f"; {help_}" if help_ else "")) from None
 
 
 def _row(t, terms, ref, floor):

@@ -26,6 +26,35 @@ from pdfem.kernels.stable import q4_stable_dt
 from pdfem.parallel.exchange import rebuild
 from pdfem.store import Store
 
+# What can help when a check fails, by the name its message starts with ("check NAME: ..."):
+# what a restart from the last good state may change, and what needs a new run
+ADVICE = {
+    "non-finite": ("a smaller time.safety, guards.dt_retries", "[bulk_viscosity]"),
+    "inverted element": ("a smaller time.safety, guards.dt_retries",
+                         "[bulk_viscosity], contact.damping, another grain mesh "
+                         "(element.level, element.rule)"),
+    "contact overlap": ("a smaller time.safety, guards.dt_retries",
+                        "[bulk_viscosity], contact.damping, a stiffer contact (contact.kn0) or a "
+                        "larger contact.delta_max, another grain mesh (element.level, "
+                        "element.rule)"),
+    "time step": ("a smaller time.dt_min",
+                  "[bulk_viscosity], contact.damping, guards.cap_contact where the contact "
+                  "stiffness is a numerical penalty"),
+    "energy drift": ("a smaller time.safety, guards.dt_retries, a larger guards.energy_drift "
+                     "where the drift is understood", ""),
+    "conduction sub-steps": ("a smaller time.safety",
+                             "a coarser grain mesh (element.level), a lower conductivity"),
+}
+
+
+def advice(message):
+    """'what can help: ...' for the failed check named in ``message``, or ''."""
+    for name, (restart, new_run) in ADVICE.items():
+        if f"check {name}:" in message:
+            return "what can help: " + "; ".join(
+                [f"on restart {restart}"] + ([f"in a new run {new_run}"] if new_run else []))
+    return ""
+
 
 class Snapshot:
     """The state at the end of one good step (every rank holds its owned bodies)."""

@@ -37,6 +37,8 @@ def test_energy_drift_stops_all_ranks_and_keeps_the_last_good_state(tmp_path):
     msg = line[0]
     assert "check energy drift" in msg and "step " in msg and "t=" in msg
     assert "guards.energy_drift = 0.003" in msg and "r.h5.ckpt.h5" in msg
+    assert msg.endswith("what can help: on restart a smaller time.safety, guards.dt_retries, a "
+                        "larger guards.energy_drift where the drift is understood")
     # No finished run file; the last good state and the run so far are kept for a restart
     assert not (tmp_path / "r.h5").exists()
     assert (tmp_path / "r.h5.part").exists()
@@ -168,3 +170,22 @@ def test_contact_stiffness_cap_logs_and_allows_the_element_step(tmp_path):
     steps = [int(p.stdout.split("done: ")[1].split()[0]) for p in (pa, pb)]
     # kn0 = 1e20 limits the step 100-fold below the elements'; the cap gives it back
     assert steps[1] * 20 < steps[0]
+
+
+def test_every_check_names_what_can_help():
+    """Every check a run can fail ("check NAME: ..." in the sources) has its advice, and the
+    advice splits what a restart may change from what needs a new run."""
+    import pathlib
+    import re
+
+    from pdfem.guards import ADVICE, advice
+
+    root = pathlib.Path(__file__).resolve().parents[2] / "pdfem"
+    names = set()
+    for path in root.rglob("*.py"):
+        names |= set(re.findall(r'(?:f"|s: )check ([a-z][a-z -]*):', path.read_text()))
+    assert {"non-finite", "inverted element", "contact overlap", "energy drift"} <= names
+    assert names <= set(ADVICE), names - set(ADVICE)
+    text = advice("step 7, t=1e-07 s: check contact overlap: the contact between ...")
+    assert text.startswith("what can help: on restart ") and "in a new run [bulk_viscosity]" in text
+    assert advice("some other failure") == ""

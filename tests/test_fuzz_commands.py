@@ -15,7 +15,8 @@ half-written VTU, summary or figure) left behind. The classes:
 - export and analyse: a real run file and a real shock run file (built once) copied and one
   dataset, group or attribute deleted, replaced by strings, a group, another dtype or shape,
   one value made NaN, infinite, negative or huge, the scene attribute replaced by garbage,
-  or the file's bytes truncated or overwritten;
+  or the file truncated (and, in the long mode only, bytes overwritten in place: the HDF5
+  library can loop forever inside its own code on some damaged metadata, beyond any alarm);
 - any of these commands: garbage, huge or missing option values and output paths that are
   folders, missing or files.
 
@@ -296,9 +297,12 @@ def _resize(a, how):
 def _mutate(path, data, members):
     """Mutate the HDF5 file at path once (drawing from ``data``); returns what was done."""
     dsets, groups, attrs = members
-    kind = data.draw(st.sampled_from(
-        ["delete", "strings", "dtype", "shape", "value", "value", "group", "delete group",
-         "attribute", "delete attribute", "truncate", "overwrite"]))
+    # Bytes overwritten in place only in the long mode: the HDF5 library can loop forever in
+    # its own code on some damaged metadata, where no alarm reaches it, and which bytes hold
+    # metadata changes with every run file built
+    kinds = ["delete", "strings", "dtype", "shape", "value", "value", "group", "delete group",
+             "attribute", "delete attribute", "truncate"] + (["overwrite"] if LONG else [])
+    kind = data.draw(st.sampled_from(kinds))
     if kind in ("truncate", "overwrite"):
         size = os.path.getsize(path)
         k = data.draw(st.integers(0, size - 1))

@@ -31,8 +31,11 @@ from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
 from pdfem.mesh.quality import corner_jacobians
 from pdfem.parallel.exchange import owned_grain_cells, rebuild
-from pdfem.store import Batch, Store, core_fields
+from pdfem.store import NODE, Batch, Field, Store, core_fields
 from pdfem.timers import Timers
+
+# A restart's contact forces of the last step, carried with the nodes to their owners
+RESTART_FC = Field("restart_contact_force", NODE, (2,), np.float64)
 
 # Element temperatures of a run without thermo-mechanical coupling (the kernels skip them)
 NO_ETH = np.zeros((0, 3))
@@ -156,31 +159,33 @@ class Simulation:
             self.store, self.halo = rebuild(comm, store, self.grid, self.owner, self.nglobal)
 
     def _build_restart(self, path):
-        """Replace the initial bodies by a checkpoint's: every rank keeps the global bodies
-        and the grains whose centroid cell it owns; the rebuild makes the ghosts."""
+        """Replace the initial bodies by a checkpoint's: every rank reads the global bodies
+        and a block of grains, and the rebuild moves each grain to the owner of its cell,
+        with the contact forces of its nodes riding along, and makes the ghosts."""
         from pdfem.io.checkpoint import read_checkpoint
 
-        ck = read_checkpoint(path, self.fields)
+        ck = read_checkpoint(path, self.fields, self.comm)
         self.checkpoint = ck
         _same_scene(path, ck.scene_text, self.scene.to_toml_string())
-        b = ck.batch
-        isg = b.a["isglobal"] == 1
-        # Global bodies once (rank 0's copy), then the grains, both in gid order
-        glob = np.nonzero(isg)[0]
-        grains = np.nonzero(~isg)[0]
-        order = np.concatenate([glob[np.argsort(b.a["gid"][glob], kind="stable")],
-                                grains[np.argsort(b.a["gid"][grains], kind="stable")]])
-        full = Store(self.fields, Store(self.fields, b, b.nbody).take(order), b.nbody)
-        cells = owned_grain_cells(full, self.grid, self.nglobal)
+        fields = self.fields + ([RESTART_FC] if ck.contact_force is not None else [])
+        if ck.contact_force is not None:
+            ck.batch.a[RESTART_FC.name] = ck.contact_force
+        store = Store(fields, Batch(fields, ck.batch.a), ck.batch.nbody)
+        # The partition of the checkpoint's grains: cell weights summed over the ranks
+        cells = owned_grain_cells(store, self.grid, self.nglobal)
         weights = np.bincount(cells, minlength=self.grid.ncell).astype(float)
+        self.comm.Allreduce(MPI.IN_PLACE, weights, op=MPI.SUM)
         self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,
                                self.grid.ny, self.comm.size)
-        mine = self.nglobal + np.nonzero(self.owner[cells] == self.comm.rank)[0]
-        keep = np.concatenate([np.arange(self.nglobal), mine])
-        store = Store(self.fields, full.take(keep), keep.shape[0])
         with self.timers.phase("migration"):
-            self.store, self.halo = rebuild(self.comm, store, self.grid, self.owner,
-                                            self.nglobal)
+            store, self.halo = rebuild(self.comm, store, self.grid, self.owner, self.nglobal)
+        if ck.contact_force is not None:
+            # The owned nodes' forces for the first frame; the store without them
+            ck.contact_force = getattr(store, RESTART_FC.name)[: store.nn_own].copy()
+            store = Store(self.fields, Batch(self.fields, {f.name: getattr(store, f.name)
+                                                           for f in self.fields}),
+                          store.nb_own)
+        self.store = store
 
     def _cap_contact(self, restart):
         """The cap_contact remedy (pdfem.guards); a restart reuses the checkpoint's cap."""

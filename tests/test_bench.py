@@ -51,8 +51,24 @@ def test_bench_contact_prints_the_bed_row(tmp_path):
     assert m and _positive(m.groups())
 
 
+def test_bench_checkpoint_prints_time_and_rank_0_memory(tmp_path):
+    p = pdfem(["bench", "checkpoint", "--grains", "300", "--repeat", "2"], tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    out = p.stdout
+    assert "300 cap grains (6 elements each) on 2 ranks" in out
+    m = re.search(r"on 2 ranks, (\d+) contact history rows", out)
+    assert m and int(m[1]) > 0
+    m = re.search(rf"^checkpoint file {NUM} MiB; rank 0 resident {NUM} MiB", out, re.M)
+    assert m and _positive(m.groups())
+    for what in ("write", "restart set-up"):
+        m = re.search(rf"^{what} {NUM} s; rank 0 peak growth during (?:the write|it) "
+                      r"-?\d+\.\d MiB$", out, re.M)
+        assert m and _positive(m.groups()), out
+
+
 @pytest.mark.parametrize("args", [
     ["bench"],
+    ["bench", "checkpoint", "--grains", "1"],
     ["bench", "elements", "--n", "0"],
     ["bench", "elements", "--repeat", "two"],
     ["bench", "contact", "--sizes", "1000,x"],

@@ -29,7 +29,7 @@ WARMUP = 3
 STEPS = 10
 
 
-def _bed(comm, n, skin=None):
+def bed_simulation(comm, n, skin=None):
     """Simulation of an n-grain benchmark bed on comm, strips partition, skin overridden."""
     from pdfem.scene import parse_scene
     from pdfem.solver import Simulation
@@ -82,7 +82,7 @@ def run_parallel(per_rank, repeat, comm=None):
     n = per_rank * comm.size
     out = {"ranks": comm.size, "grains": n}
     for label, skin in (("normal", None), ("forced", 1e-12)):
-        sim = _bed(comm, n, skin)
+        sim = bed_simulation(comm, n, skin)
         for _ in range(WARMUP):
             sim.step()
         samples = [_sample(sim, comm, STEPS) for _ in range(repeat)]

@@ -1,13 +1,15 @@
-"""``pdfem bench {elements,contact,parallel,startup,all}``: print performance figures.
+"""``pdfem bench {elements,contact,parallel,checkpoint,startup,all}``: print performance figures.
 
 elements: element updates per second of both integration rules, numba kernels vs their
 numpy twins and the 1-point kernel vs its C yardstick (pdfem.bench.elements); with
 --material cap and/or --heat, the cost per element-step of those effects in real solver steps
 (pdfem.bench.effects). contact: whole steps of dense grain beds of several sizes, contact and
 element time, memory per grain (pdfem.bench.contact). parallel: halo and migration cost,
-under mpirun (pdfem.bench.parallel). startup: seconds to the first step of a fresh process
+under mpirun (pdfem.bench.parallel). checkpoint: the time of a checkpoint's write and of a
+restart's set-up, and rank 0's memory during both, on any number of ranks
+(pdfem.bench.checkpoint). startup: seconds to the first step of a fresh process
 (pdfem.bench.startup). all: every figure with its target (pdfem.bench.suite). Figures are
-printed, never asserted; all but parallel run on one rank.
+printed, never asserted; all but parallel and checkpoint run on one rank.
 """
 
 import json
@@ -16,7 +18,8 @@ import os
 from pdfem.errors import InputError
 
 # The largest sizes and repeat count taken (more is a typo: memory or time would run out)
-MOST = {"--n": 10**7, "--sizes": 10**7, "--per-rank": 10**7, "--repeat": 1000}
+MOST = {"--grains": 10**7, "--n": 10**7, "--sizes": 10**7, "--per-rank": 10**7,
+        "--repeat": 1000}
 
 
 def _positive_int(name, text, least=1):
@@ -43,12 +46,14 @@ def add_parser(sub):
     """Register the ``bench`` command and its sub-commands."""
     p = sub.add_parser("bench", help="print performance figures",
                        description=__doc__.split("\n\n")[1])
-    what = p.add_subparsers(dest="what", metavar="{elements,contact,parallel,startup,all}",
-                            required=True, parser_class=type(p))
+    what = p.add_subparsers(dest="what", required=True, parser_class=type(p),
+                            metavar="{elements,contact,parallel,checkpoint,startup,all}")
     # Arguments of each sub-command (all takes the union)
     el = what.add_parser("elements", help="element force kernels: numba vs numpy and C")
     co = what.add_parser("contact", help="whole steps of dense grain beds")
     pa = what.add_parser("parallel", help="halo and migration cost (run under mpirun)")
+    ck = what.add_parser("checkpoint", help="checkpoint write and restart: time, rank 0's "
+                         "memory (any number of ranks)")
     su = what.add_parser("startup", help="seconds to the first step, cold and warm")
     al = what.add_parser("all", help="every figure with its target")
     for q in (el, al):
@@ -65,10 +70,11 @@ def add_parser(sub):
         q.add_argument("--per-rank", default="10000", help="grains per rank (default 10000)")
     pa.add_argument("--json", default=None, help="also write the figures to this JSON file")
     pa.add_argument("--force", action="store_true", help="overwrite an existing JSON file")
+    ck.add_argument("--grains", default="100000", help="grains of the bed (default 100000)")
     for q in (su, al):
         q.add_argument("--warm-only", action="store_true", help="skip the cold start (a "
                        "private empty numba cache: every kernel compiled, about 30 s)")
-    for q in (el, co, pa, su, al):
+    for q in (el, co, pa, ck, su, al):
         q.add_argument("--repeat", default="5", help="timed samples; the median is printed "
                        "(default 5)")
     return p
@@ -79,6 +85,7 @@ def run(args):
     # Arguments first: a bad one costs no benchmark time (nor MPI's start)
     repeat = _positive_int("--repeat", args.repeat)
     n = _positive_int("--n", args.n) if hasattr(args, "n") else None
+    grains = _positive_int("--grains", args.grains, least=2) if hasattr(args, "grains") else None
     sizes = _sizes(args.sizes) if hasattr(args, "sizes") else None
     per_rank = _positive_int("--per-rank", args.per_rank, least=2) \
         if hasattr(args, "per_rank") else None
@@ -98,6 +105,11 @@ def run(args):
             with open(args.json + ".part", "w") as f:
                 json.dump(r, f)
             os.replace(args.json + ".part", args.json)
+        return 0
+    if args.what == "checkpoint":
+        from pdfem.bench.checkpoint import print_checkpoint
+
+        print_checkpoint(grains, repeat, log=_log)
         return 0
     if world().size > 1:
         raise InputError(f"bench {args.what}: runs on one rank (single-core figures); start it "

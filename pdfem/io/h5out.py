@@ -234,24 +234,13 @@ class RunWriter:
             self.f = None
         self.comm.Barrier()
 
-    def node_field(self, sim, name):
-        """A node frame field of every node, by global id, on rank 0 (None elsewhere)."""
-        nidx, eidx, gn, ge = self._rows(sim)
-        vals = np.asarray(field_table(sim)[name][2](nidx, eidx), np.float64)
-        parts = self.comm.gather((gn, vals), root=0)
-        if self.comm.rank != 0:
-            return None
-        out = np.zeros((self.nn_tot,) + vals.shape[1:])
-        for idx, v in parts:
-            out[idx] = v
-        return out
-
     def restore_contact_force(self, sim, saved):
-        """Contact forces of this rank's frame rows from a checkpoint's (every node by
-        global id): the frame written at a restart shows the forces of the step before."""
-        if sim.fc.shape[0] and saved is not None and saved.shape == (self.nn_tot, 2):
-            nidx, _, gn, _ = self._rows(sim)
-            sim.fc[nidx] = saved[gn]
+        """Contact forces of this rank's frame rows from a checkpoint's (``saved``: the rows
+        of the owned nodes, in store order): the frame written at a restart shows the
+        forces of the step before."""
+        if sim.fc.shape[0] and saved is not None and saved.shape[0] == sim.store.nn_own:
+            nidx = self._rows(sim)[0]
+            sim.fc[nidx] = saved[nidx]
 
     def close(self, energy_rows, terms, ok=True, gauges=None):
         """Write the energy series and gauges (rank 0 holds them), close, rename into place.

@@ -77,15 +77,10 @@ class Checkpointer:
                  "gauges_k": gsched.k, "checkpoint_k": self.k, "run_file": writer.tmp,
                  "segments": writer.segments, "contact_cap": sim.contact_cap,
                  "safety": sim.safety, "dt_retries_left": sim.guards.retries_left}
-        # The contact forces of the last step, for a frame written at the restart
-        fc = writer.node_field(sim, "contact_force") if "contact_force" in writer.fields \
-            and sim.fc.shape[0] else None
         arrays = {}
         if sim.comm.rank == 0:
             arrays["energy_rows"] = np.array(rows)
             arrays["energy_ref"] = np.array([ref[t] for t in TERMS])
-            if fc is not None:
-                arrays["contact_force"] = fc
             if len(gauges):
                 t, h = gauges.history()
                 arrays["gauge_times"], arrays["gauge_rows"] = t, h
@@ -121,6 +116,6 @@ class Checkpointer:
             if sim.comm.rank == 0:
                 log(f"pdfem: warning: {writer.tmp} is missing; frames before "
                     f"t={sim.t:.6e} s are not in the new run file, which starts there")
-            writer.restore_contact_force(sim, arrays.get("contact_force"))
+            writer.restore_contact_force(sim, sim.checkpoint.contact_force)
             writer.write_frame(sim)
         return rows, ref

@@ -17,7 +17,7 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.io.checkpoint import read_checkpoint
+from pdfem.io.checkpoint import FORMAT, read_checkpoint
 from tests.e2e.test_cli import MPIRUN, ROOT, datasets, pdfem
 from tests.scenes import settling_bed
 
@@ -46,7 +46,7 @@ def reference(tmp_path_factory):
     return d / "ref.h5"
 
 
-@pytest.mark.parametrize("ranks", [1, 3])
+@pytest.mark.parametrize("ranks", [1, 3, 4])
 def test_restart_is_bit_identical(tmp_path, reference, ranks):
     scene = _bed(tmp_path, 4000, "\ncheckpoint_interval = 1.5e-5")
     p = pdfem(["run", scene, "-o", "a.h5", "--quiet"], tmp_path, ranks=2)
@@ -67,6 +67,39 @@ def test_restart_is_bit_identical(tmp_path, reference, ranks):
     for k in ref:
         if k.startswith("energy/"):
             assert np.array_equal(ref[k], b[k]), k
+
+
+def _checkpoint_datasets(path):
+    """{name: values} of every dataset and attribute of a checkpoint but its rank count."""
+    out = {}
+    with h5py.File(path) as f:
+        f.visititems(lambda name, d: out.__setitem__(name, d[...])
+                     if isinstance(d, h5py.Dataset) else None)
+        out.update({f"@{k}": v for k, v in f.attrs.items() if k != "nranks"})
+    return out
+
+
+def test_checkpoint_is_the_same_file_on_any_number_of_ranks(tmp_path):
+    """Every rank writes its block of the global numbering: the checkpoint written on 1, 2
+    and 3 ranks holds the same bytes in every dataset (bodies, nodes, elements, contact
+    history by body, driver series)."""
+    scene = _bed(tmp_path, 1500, "\ncheckpoint_interval = 1.5e-5")
+    files = []
+    for ranks in (1, 2, 3):
+        p = pdfem(["run", scene, "-o", f"r{ranks}.h5", "--quiet"], tmp_path, ranks=ranks)
+        assert p.returncode == 0, p.stderr
+        files.append(_checkpoint_datasets(tmp_path / f"r{ranks}.h5.ckpt.h5"))
+    one = files[0]
+    assert one["history/key"].shape[0] > 0 and "nodes/contact_force" in one
+    assert np.count_nonzero(one["nodes/contact_force"]) > 0
+    for other in files[1:]:
+        assert sorted(other) == sorted(one)
+        for k in one:
+            if k != "@state":
+                assert np.array_equal(one[k], other[k]), k
+        # The state differs only in the run file's segment paths' folder (the same here)
+        assert json.loads(other["@state"]) == json.loads(one["@state"]) | {
+            "run_file": json.loads(other["@state"])["run_file"]}
 
 
 def _wait_for(path, timeout=120):
@@ -157,7 +190,7 @@ def test_sigkill_of_a_run_checkpointing_every_step_keeps_a_readable_one(tmp_path
     proc.communicate(timeout=60)
     ck = tmp_path / "k.h5.ckpt.h5"
     with h5py.File(ck) as f:
-        assert f.attrs["format"] == 1
+        assert f.attrs["format"] == FORMAT
     # The restart (without frequent checkpoints) ends equal to the uninterrupted run
     _bed(tmp_path, 4000)
     p = pdfem(["run", scene, "--restart", str(ck), "-o", "k.h5", "--quiet"], tmp_path)
@@ -232,6 +265,33 @@ def test_checkpoint_reader_names_a_bad_file(tmp_path):
         f.attrs["format"] = 99
     with pytest.raises(InputError, match="not a pdfem checkpoint"):
         read_checkpoint(str(bad), [])
+
+
+@pytest.mark.parametrize("damage", ["drop history/start", "grain rows", "string gid"])
+def test_a_damaged_checkpoint_is_refused_on_every_rank(tmp_path, damage):
+    """A checkpoint whose rows do not fit together is refused with one line and status 2
+    on 2 ranks, though only one rank's block may hold the damage (no rank hangs)."""
+    scene = _bed(tmp_path, 300, "\ncheckpoint_interval = 1.0e-6")
+    p = pdfem(["run", scene, "-o", "a.h5", "--quiet"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    ck = tmp_path / "a.h5.ckpt.h5"
+    with h5py.File(ck, "a") as f:
+        if damage == "drop history/start":
+            del f["history/start"]
+        elif damage == "grain rows":
+            # The last grain's gid points elsewhere: only the last rank's block sees it
+            gid = f["bodies/gid"]
+            gid[int((f["bodies/isglobal"][...] == 0).sum()) - 1] = 0
+        else:
+            del f["bodies/gid"]
+            f["bodies/gid"] = np.array([b"a"] * f["bodies/nn"].shape[0])
+    p = pdfem(["run", scene, "--restart", str(ck), "-o", "b.h5", "--quiet"], tmp_path,
+              ranks=2, timeout=120)
+    assert p.returncode == 2, p.stderr
+    lines = [ln for ln in p.stderr.splitlines() if ln.strip()]
+    assert len(set(lines)) == 1 and "is not a complete pdfem checkpoint" in lines[0], lines
+    assert "Traceback" not in p.stderr
+    assert not (tmp_path / "b.h5").exists() and not (tmp_path / "b.h5.part").exists()
 
 
 def test_rebalancing_moves_cells_and_keeps_results_bit_identical(tmp_path):
@@ -317,7 +377,7 @@ elif phase == "checkpoint":
     create = h5py.Group.create_dataset
 
     def create_dataset(self, name, *args, **kw):
-        if name == "buffer_sizes" and self.file.filename.endswith(".ckpt.h5.part"):
+        if name == "history/key" and self.file.filename.endswith(".ckpt.h5.part"):
             hit()
         return create(self, name, *args, **kw)
 

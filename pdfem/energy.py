@@ -9,7 +9,7 @@ hypoelastic update is not the integral of that work once volumes change by a few
 at 1000 m/s it was 20 % short in the compressed grains.) Balance:
     E = K + U_strain + U_contact + V_gravity + D_damping + D_plastic + D_friction
         + D_contact_damping + D_viscous - W_bc
-        + (E_thermal - Q_sources - Q_bc) + W_thermal_strain
+        + E_thermal - Q_paid - Q_bc + E_coupling
 stays equal to its initial value. The contacts' normal force is the gradient of their
 stored energy, so the work their forces do on the bodies equals the loss of U_contact, D_friction
 and D_contact_damping up to the time discretisation; L_contact, minus that work less the growth
@@ -17,10 +17,14 @@ of the three since t = 0 (the work accumulated by the integrator exactly as it m
 measures what is left. It is reported as a diagnostic and is not part of E: any energy the
 contacts create or destroy shows in the error. D_viscous is the work of the bulk
 viscosity. The error is |E - E0| over the largest term now or at t = 0 (never below
-energy_floor). With [heat], E_thermal = sum C (T - T_initial) grows by what the sources
-(dissipation, friction, thermo-elastic coupling) and the held nodes put in, so the bracket
-checks that the heat update conserves energy while the dissipated terms stay counted once;
-W_thermal_strain is the work of the stress on the thermal strain (thermal expansion).
+energy_floor). With [heat], every heat source is counted once, on the mechanical side
+(pdfem.effects.heat): E_thermal = sum C (T - T_initial) is whatever heat is in the bodies;
+Q_paid is the part of D_plastic and D_friction that the scene turns into heat (beta and the
+friction heating fraction times those terms, not what the sources added); Q_bc is what the
+held nodes took; E_coupling = -sum 3 alpha T p A is the thermo-elastic energy, which pays for
+the thermo-elastic heat and for the stress work on the thermal strain. A heat source that no
+mechanical term pays for therefore shows in the error. What the sources put on the nodes
+(heat_sources) and the thermal-strain work (thermal_work) are reported as diagnostics.
 Without [heat] they are zero.
 
 Between the samples the drift guard checks the balance every ``guards.energy_steps`` steps
@@ -43,11 +47,13 @@ from pdfem.kernels.integrate import ACC_BC, ACC_CDAMP, ACC_CWORK, ACC_DAMP, ACC_
 from pdfem.parallel.mpi import gather_rows
 
 TERMS = ("kinetic", "strain", "contact", "potential", "damping", "plastic", "friction",
-         "contact_damping", "contact_loss", "viscous", "bc_work", "thermal", "heat_sources",
-         "heat_bc", "thermal_work")
-SIGN = {"bc_work": -1.0, "heat_sources": -1.0, "heat_bc": -1.0}
-# Reported with the terms, not part of the balance (it is the contacts' share of its error)
-DIAGNOSTIC = ("contact_loss",)
+         "contact_damping", "contact_loss", "viscous", "bc_work", "thermal", "heat_paid",
+         "heat_bc", "coupling", "heat_sources", "thermal_work")
+SIGN = {"bc_work": -1.0, "heat_paid": -1.0, "heat_bc": -1.0}
+# Reported with the terms, not part of the balance: the contacts' share of its error, what
+# the heat sources put on the nodes and the stress work on the thermal strain (both are paid
+# by terms of the balance: heat_paid and coupling)
+DIAGNOSTIC = ("contact_loss", "heat_sources", "thermal_work")
 # Per-step drift check: each body's multiples of the quantum stay below 2^QBITS / n_bodies,
 # so that their int64 sum cannot overflow
 QBITS = 62

@@ -14,10 +14,24 @@ the nodes and the temperatures advance:
 The other heat effects (pdfem.effects.thermal, pdfem.effects.contact_heat) only switch parts
 of this on; without [heat] none of them can exist (the scene check says so).
 
-Energy (per body, summed like every other term): thermal = sum C (T - T_initial); the
-heat_sources and heat_bc accumulators hold what the sources and the held nodes added, so that
-thermal - heat_sources - heat_bc stays zero up to round-off (conduction only moves heat);
-thermal_work is the work of the stress on the thermal strain (the element kernels add it).
+Energy (per body, summed like every other term), each source counted once, on the
+mechanical side (pdfem.energy):
+    thermal      sum C (T - T_initial), whatever put the heat there
+    heat_paid    what the mechanics gave up as heat: beta x the plastic work and the friction
+                 heating fraction x the frictional dissipation, from the mechanical
+                 accumulators (the plastic and friction terms keep the whole dissipation)
+    coupling     -3 alpha T_e p_e A_e summed over the elements, less its value at t = 0: the
+                 coupled energy of thermo-elasticity. With thermal expansion (p = K (3 alpha
+                 dT - eps_v)), the internal energy is e = U_elastic + c dT - 3 alpha T p per
+                 unit volume, and the stress power on the total strain changes it; so the
+                 thermo-elastic heat 3 alpha T d(pA) and the stress work on the thermal strain
+                 are both paid by this term. One without the other creates energy: the scene
+                 check refuses [thermoelastic] without [thermal_expansion] and the reverse.
+    heat_bc      what the held nodes took or gave
+so thermal - heat_paid - heat_bc - (heat of thermo-elasticity) stays zero only when every
+source has its mechanical counterpart; a source that has none shows in the balance error.
+heat_sources (what the sources put on the nodes) and thermal_work (the stress work on the
+thermal strain) are reported beside the balance, not in it.
 """
 
 import math
@@ -36,10 +50,11 @@ from pdfem.kernels.heat import (
     element_thermal_state,
     element_to_nodes,
     hold_temperature,
+    kirchhoff_pressure,
     thermal_energy,
 )
-from pdfem.kernels.integrate import body_sums
-from pdfem.kernels.params import CP, RHO, T_REF
+from pdfem.kernels.integrate import ACC_FRIC, body_sums
+from pdfem.kernels.params import ALPHA, CP, RHO, T_REF
 from pdfem.store import BODY, ELEM, NODE, Field
 
 # Columns of the per-body accumulator hacc
@@ -63,6 +78,7 @@ FIELDS = (
 COUPLED_FIELDS = (
     Field("tprev", NODE, (), np.float64),
     Field("eth", ELEM, (3,), np.float64),
+    Field("tau_prev", ELEM, (), np.float64),
 )
 
 
@@ -97,6 +113,8 @@ class Heat(Effect):
             cap_table = sim.mat_params.copy()
             cap_table[:, RHO] = sim.mat_params[:, RHO] * sim.mat_params[:, CP]
             q4_lumped_mass(s.x, s.conn, s.emat, cap_table, 0, s.nelem, s.tcap)
+            if self.couple_elements:
+                kirchhoff_pressure(s.x, s.conn, s.sig, 0, s.nelem, s.tau_prev)
         self._hold_blocks(sim)
         self.src = np.zeros(s.nnode)
         self.q = np.zeros(s.nnode)
@@ -135,8 +153,10 @@ class Heat(Effect):
         with sim.timers.phase("heat"):
             # Element sources: dissipation heating, thermo-elastic coupling
             if self.beta > 0.0 or self.thermoelastic:
-                element_heat(s.x, sim.du, s.T, s.conn, s.emat, sim.mat_params, s.ewp,
-                             s.ewp_prev, self.beta, self.thermoelastic, 0, s.ne_own, self.eh)
+                tau_prev = s.tau_prev if self.thermoelastic else self.eh
+                element_heat(s.x, s.T, s.conn, s.emat, sim.mat_params, s.sig, s.ewp,
+                             s.ewp_prev, tau_prev, self.beta, self.thermoelastic, 0, s.ne_own,
+                             self.eh)
                 element_to_nodes(s.x, s.conn, 0, s.ne_own, self.eh, self.src)
             _body_node_sums(self.src, s.node_body, s.nn_own, s.hacc[:, HACC_SRC])
             # Conduction sub-steps (the sources enter with the first)
@@ -168,16 +188,39 @@ class Heat(Effect):
 
     def energy_terms(self, sim, out):
         s = sim.store
-        nb = s.nb_own
+        nb, ne = s.nb_own, s.ne_own
         e = np.empty(nb)
         thermal_energy(s.T, self.t_init, s.tcap, s.node_body, s.nn_own, e)
         out["thermal"] = e
         out["heat_sources"] = s.hacc[:nb, HACC_SRC].copy()
         out["heat_bc"] = s.hacc[:nb, HACC_BC].copy()
+        # The dissipation that became heat, from the mechanical accumulators
+        paid = np.zeros(nb)
+        if self.beta > 0.0:
+            body_sums(self.beta * s.ewp[:ne], s.estart[:nb], s.ne[:nb], paid)
+        fraction = self.friction_fraction(sim)
+        if fraction > 0.0:
+            paid += fraction * s.acc[:nb, ACC_FRIC]
+        out["heat_paid"] = paid
         if self.couple_elements:
             w = np.empty(nb)
-            body_sums(s.eth[:, 2], s.estart[:nb], s.ne[:nb], w)
+            body_sums(s.eth[:ne, 2], s.estart[:nb], s.ne[:nb], w)
             out["thermal_work"] = w
+        if self.thermoelastic:
+            # -3 alpha T_e p_e A_e of the present state
+            tau = np.empty(ne)
+            kirchhoff_pressure(s.x, s.conn, s.sig, 0, ne, tau)
+            te = s.T[s.conn[:ne]].mean(axis=1)
+            c = np.empty(nb)
+            body_sums(-3.0 * sim.mat_params[s.emat[:ne], ALPHA] * te * tau, s.estart[:nb],
+                      s.ne[:nb], c)
+            out["coupling"] = c
+
+    @staticmethod
+    def friction_fraction(sim):
+        """The friction heating fraction (0 without [friction_heating])."""
+        return next((float(e.heat_fraction) for e in sim.effects if e.name == "contact"
+                     and getattr(e, "heat_fraction", 0.0) > 0.0), 0.0)
 
 
 def _body_node_sums(val, node_body, n1, out):

@@ -16,7 +16,8 @@ diagonal (the length of the mechanical limit); for a square of side h this is h^
 half the exact limit h^2 rho c / (2 k) of the lumped bilinear element.
 
 Sign convention (stress only enters through the thermo-elastic source): tension positive,
-compression negative; a compression (area decrease) of an expanding material heats it.
+compression negative, pressure p = -(s_xx + s_yy + s_zz) / 3 positive in compression; a rise
+of the pressure of an expanding material heats it.
 """
 
 import numpy as np
@@ -24,7 +25,7 @@ from numba import njit
 
 from pdfem.kernels.broad_phase import element_corners
 from pdfem.kernels.element import ETA, GP, XI, _ip_grad
-from pdfem.kernels.params import ALPHA, BULK, COND, CP, RHO
+from pdfem.kernels.params import ALPHA, COND, CP, RHO
 from pdfem.kernels.stable import element_length
 
 
@@ -105,14 +106,41 @@ def element_to_nodes(x, conn, e0, e1, val, out):
 
 
 @njit(cache=True)
-def element_heat(x, du, temp, conn, emat, mat_params, ewp, ewp_prev, beta, thermoelastic,
-                 e0, e1, out):
+def _tau(x, conn, sig, e):
+    """p A of element e: the mean pressure of its integration points, p = -(s_xx + s_yy +
+    s_zz) / 3, times its current area (shoelace)."""
+    a = 0.0
+    for i in range(4):
+        n = conn[e, i]
+        m = conn[e, (i + 1) % 4]
+        a += x[n, 0] * x[m, 1] - x[m, 0] * x[n, 1]
+    nip = sig.shape[1]
+    p = 0.0
+    for q in range(nip):
+        p -= (sig[e, q, 0] + sig[e, q, 1] + sig[e, q, 3]) / (3.0 * nip)
+    return p * 0.5 * a
+
+
+@njit(cache=True)
+def kirchhoff_pressure(x, conn, sig, e0, e1, out):
+    """out[e] = p_e A_e (:func:`_tau`) for elements [e0, e1) [J/m]."""
+    for e in range(e0, e1):
+        out[e] = _tau(x, conn, sig, e)
+
+
+@njit(cache=True)
+def element_heat(x, temp, conn, emat, mat_params, sig, ewp, ewp_prev, tau_prev, beta,
+                 thermoelastic, e0, e1, out):
     """Heat [J/m] this step's sources put into each element e in [e0, e1): out[e] = ...
 
     beta (ewp[e] - ewp_prev[e])                 dissipation heating (plastic work, eq. 48)
-    - 3 K alpha T_e (A_e - A_e,old)             thermo-elastic coupling (when thermoelastic)
-    with T_e the mean nodal temperature and A_e,old the area at x - du. ewp_prev is then set
-    to ewp. beta = 0 skips the first term, thermoelastic = False the second.
+    3 alpha T_e (tau_e - tau_prev[e])           thermo-elastic coupling (when thermoelastic)
+    with T_e the mean nodal temperature and tau = p A (:func:`kirchhoff_pressure`, from the
+    stress just updated). For a small elastic change, tau - tau_prev = -K A d(eps_v,elastic)
+    + p dA, so this is eq. 48's -3 K alpha T dV with the elastic volume change, plus the
+    pressure's share that makes -3 alpha T p A the coupling's energy (see pdfem.effects.heat).
+    ewp_prev and tau_prev are then set to the new values. beta = 0 skips the first term,
+    thermoelastic = False the second.
     """
     for e in range(e0, e1):
         h = 0.0
@@ -120,19 +148,12 @@ def element_heat(x, du, temp, conn, emat, mat_params, ewp, ewp_prev, beta, therm
             h += beta * (ewp[e] - ewp_prev[e])
             ewp_prev[e] = ewp[e]
         if thermoelastic:
-            p = mat_params[emat[e]]
-            a_new = 0.0
-            a_old = 0.0
+            tau = _tau(x, conn, sig, e)
             te = 0.0
-            # Areas now and at the step start (shoelace), mean temperature
             for i in range(4):
-                n = conn[e, i]
-                m = conn[e, (i + 1) % 4]
-                a_new += x[n, 0] * x[m, 1] - x[m, 0] * x[n, 1]
-                a_old += ((x[n, 0] - du[n, 0]) * (x[m, 1] - du[m, 1])
-                          - (x[m, 0] - du[m, 0]) * (x[n, 1] - du[n, 1]))
-                te += 0.25 * temp[n]
-            h -= 3.0 * p[BULK] * p[ALPHA] * te * 0.5 * (a_new - a_old)
+                te += 0.25 * temp[conn[e, i]]
+            h += 3.0 * mat_params[emat[e], ALPHA] * te * (tau - tau_prev[e])
+            tau_prev[e] = tau
         out[e] = h
 
 

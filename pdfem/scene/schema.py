@@ -391,10 +391,13 @@ SECTIONS = [
             "table switches it on.", CONDUCTION),
     Section("dissipation_heating", "table", "A fraction beta of the plastic work heats the "
             "element where it is done.", DISSIPATION_HEATING),
-    Section("thermoelastic", "table", "Thermo-elastic coupling: heat -3 K alpha T dV of each "
-            "element's volume change (every material needs expansion).", THERMOELASTIC),
+    Section("thermoelastic", "table", "Thermo-elastic coupling: heat 3 alpha T d(p A) of each "
+            "element (p its pressure, A its area: -3 K alpha T dV of the elastic volume change "
+            "plus the pressure's share); needs [thermal_expansion], every material needs "
+            "expansion.", THERMOELASTIC),
     Section("thermal_expansion", "table", "Isotropic thermal strain alpha dT in the stress "
-            "update (every material needs expansion).", THERMAL_EXPANSION),
+            "update; needs [thermoelastic], every material needs expansion.",
+            THERMAL_EXPANSION),
     Section("temperature_dependence", "table", "Moduli (softening) and cap strength "
             "(strength_softening) decrease linearly with temperature; at least one material "
             "must set one of them.", TEMPERATURE_DEPENDENCE),

@@ -285,6 +285,14 @@ def _heat_rules(r):
             for mname, m in mats.items():
                 if key not in m:
                     raise SceneError(f"materials.{mname}.{key}", f"required by [{name}]")
+    # Thermo-elastic heating and thermal expansion are one coupling: either alone creates
+    # energy that nothing pays for (pdfem.effects.heat)
+    for one, other in (("thermoelastic", "thermal_expansion"),
+                       ("thermal_expansion", "thermoelastic")):
+        if one in r and other not in r:
+            raise SceneError(other, f"is required by [{one}]: thermo-elastic heating and "
+                             "thermal expansion are one coupling, and either alone creates "
+                             "energy (add the table)")
     if "temperature_dependence" in r and not any(m.get("softening", 0.0) > 0.0 or
                                                  m.get("strength_softening", 0.0) > 0.0
                                                  for m in mats.values()):

@@ -134,7 +134,7 @@ def test_heated_bed_bit_identical_on_1_2_3_ranks(tmp_path):
     from tests.scenes import settling_bed
 
     heat = ("[heat]\ninitial = 300.0\n[conduction]\n[contact_conductance]\nh = 1.0e9\n"
-            "[friction_heating]\n[thermal_expansion]\n")
+            "[friction_heating]\n[thermal_expansion]\n[thermoelastic]\n")
     text = settling_bed(n=60, cols=10, end=8.0e-6, g=-1.0e7, partition="rcb", extra=heat)
     text = text.replace("shear = 4.4e9", "shear = 4.4e9\nspecific_heat = 1000.0\n"
                         "conductivity = 0.4\nexpansion = 5.0e-5", 1)

@@ -16,7 +16,7 @@ import tempfile
 
 from pdfem.bench.elements import machine, mesh_shape
 
-# Targets of issue 7
+# Performance targets
 TARGETS = {
     "numba/C 1pt elastic": 1.6,
     "numba/C 2x2 cap": 2.0,

@@ -27,7 +27,7 @@ CAP_KAPPA0 = 10  # initial cap position kappa_0 (I1 where cap meets envelope) [P
 CAP_T = 11  # tension cut-off on I1 (>= 0) [Pa]
 CAP_TOL = 12  # yield-surface tolerance (relative) [-]
 
-# Heat (issue 4)
+# Heat
 ALPHA = 16  # linear thermal expansion coefficient [1/K]
 CP = 17  # specific heat [J/(kg K)]
 COND = 18  # thermal conductivity [W/(m K)]

@@ -34,9 +34,9 @@ def run(sim, out_path, quiet=False, log=print):
     """Advance ``sim`` to its end time writing ``out_path``; return the summary dict.
 
     Checkpoints go to ``<out_path>.ckpt.h5`` every ``output.checkpoint_interval`` of simulated
-    time and every ``output.checkpoint_wall`` seconds, and when SIGTERM arrives: then the run
-    writes one, leaves the run file as ``<out_path>.part`` for the restart and returns with
-    ``summary["stopped"]`` set.
+    time and every ``output.checkpoint_wall`` seconds, and when SIGTERM or SIGUSR1 arrives:
+    then the run writes one, leaves the run file as ``<out_path>.part`` for the restart and
+    returns with ``summary["stopped"]`` set.
     """
     # SIGTERM caught from the start: one that arrives during set-up still ends in a checkpoint
     with catch_sigterm(sim):
@@ -251,7 +251,7 @@ def _report(summary, log):
     if _terminal():
         print()
     if summary["stopped"]:
-        log(f"stopped by SIGTERM at step {summary['steps']}, t={summary['time']:.6e} s: "
+        log(f"stopped by SIGTERM or SIGUSR1 at step {summary['steps']}, t={summary['time']:.6e} s: "
             f"checkpoint {summary['checkpoint']}; continue with --restart "
             f"{summary['checkpoint']}")
     word = "stopped" if summary["stopped"] else "done"

@@ -2,6 +2,7 @@
 
 import math
 import os
+import sys
 from importlib import resources
 
 from pdfem.errors import InputError
@@ -9,6 +10,11 @@ from pdfem.errors import InputError
 DEFAULT_SCENE = "shot912.toml"
 # Suffix of an output file while it is written (renamed when complete)
 PART = ".part"
+# Environment variable naming a file that rank 0 writes once every rank has ended the run
+# cleanly (finished, or stopped with a checkpoint by SIGTERM or SIGUSR1): jobs/mpirun.sh reads
+# it to tell a clean stop from a failure when mpirun's own exit status cannot (it exits 1
+# after it was itself signalled, although every rank exited 0)
+STATUS_ENV = "PDFEM_STATUS_FILE"
 # Steps beyond which a run is refused unless --allow-huge (a typo in time.end or a tiny
 # stable step: days of wall time even for a few grains)
 MAX_STEPS = 10**9
@@ -107,7 +113,25 @@ def run(args):
     summary = drive(sim, out, quiet=args.quiet)
     if "shock" in scene.resolved and not summary["stopped"]:
         shock_report(out, summary, comm, args.quiet)
+    write_status(os.environ.get(STATUS_ENV), summary, out, comm)
     return 0
+
+
+def write_status(path, summary, out, comm):
+    """When ``path`` is set: once every rank has got here, rank 0 writes one line to it,
+    ``stopped <checkpoint>`` or ``done <run file>``. A file it cannot write is only warned
+    about (it is what the launcher reads, not a result)."""
+    if not path:
+        return
+    comm.Barrier()
+    if comm.rank == 0:
+        line = f"stopped {summary['checkpoint']}" if summary["stopped"] else f"done {out}"
+        try:
+            with open(path, "w") as f:
+                f.write(line + "\n")
+        except OSError as exc:
+            print(f"pdfem: warning: {STATUS_ENV}: {path}: {exc.strerror}", file=sys.stderr,
+                  flush=True)
 
 
 def shock_report(out, summary, comm, quiet):

@@ -1,9 +1,10 @@
 """When to checkpoint, what the driver adds to a checkpoint, and SIGTERM.
 
-SIGTERM (what batch schedulers send at the time limit) only sets a flag; the flag joins the
-global reduction that every step already does for its time step, so all ranks see it at
-the same step, write a checkpoint together and stop. Wall-clock checkpoints are decided by
-rank 0's clock the same way.
+SIGTERM (what batch schedulers send at the time limit), or SIGUSR1 (what ``jobs/mpirun.sh``
+turns it into, see :mod:`pdfem.sigterm`), only sets a flag; the flag joins the global
+reduction that every step already does for its time step, so all ranks see it at the same
+step, write a checkpoint together and stop. Wall-clock checkpoints are decided by rank 0's
+clock the same way.
 """
 
 import signal
@@ -21,13 +22,13 @@ from pdfem.io.segments import valid_segments
 
 @contextmanager
 def catch_sigterm(sim):
-    """Within the block, SIGTERM asks ``sim`` to stop after the current step; one held since
-    the process started (:mod:`pdfem.sigterm`) asks at once."""
+    """Within the block, SIGTERM or SIGUSR1 asks ``sim`` to stop after the current step; one
+    held since the process started (:mod:`pdfem.sigterm`) asks at once."""
     def handler(signum, frame):
         sim.local_stop = 1.0
 
     try:
-        old = signal.signal(signal.SIGTERM, handler)
+        old = {sig: signal.signal(sig, handler) for sig in sigterm.STOP}
     except ValueError:  # not the main thread: leave signals alone
         yield
         return
@@ -37,7 +38,8 @@ def catch_sigterm(sim):
     try:
         yield
     finally:
-        signal.signal(signal.SIGTERM, old)
+        for sig, action in old.items():
+            signal.signal(sig, action)
 
 
 class Checkpointer:

@@ -19,6 +19,7 @@ import time
 import numpy as np
 from mpi4py import MPI
 
+from pdfem.bench.contact import reset_peak, rss_bytes
 from pdfem.bench.elements import machine
 from pdfem.bench.parallel import bed_simulation
 
@@ -26,37 +27,16 @@ from pdfem.bench.parallel import bed_simulation
 WARMUP = 3
 
 
-def _reset_peak():
-    """Reset this process's peak resident size; False where the kernel does not allow it."""
-    try:
-        with open("/proc/self/clear_refs", "w") as f:
-            f.write("5")
-        return True
-    except OSError:
-        return False
-
-
-def _memory():
-    """(resident, peak resident) of this process in bytes, from /proc/self/status."""
-    vals = {}
-    with open("/proc/self/status") as f:
-        for line in f:
-            key, _, rest = line.partition(":")
-            if key in ("VmRSS", "VmHWM"):
-                vals[key] = int(rest.split()[0]) * 1024
-    return vals["VmRSS"], vals["VmHWM"]
-
-
 def _measured(comm, action):
     """Run action() on every rank; (slowest rank's seconds, this rank's peak growth in
     bytes over its resident size before)."""
     comm.Barrier()
-    _reset_peak()
-    before, _ = _memory()
+    reset_peak()
+    before = rss_bytes("VmRSS")
     t0 = time.perf_counter()
     action()
     wall = time.perf_counter() - t0
-    _, peak = _memory()
+    peak = rss_bytes("VmHWM")
     return comm.allreduce(wall, op=MPI.MAX), peak - before
 
 
@@ -79,7 +59,7 @@ def run_checkpoint(grains, repeat, comm=None):
         sim.step()
     folder = comm.bcast(tempfile.mkdtemp(prefix="pdfem-bench-") if comm.rank == 0 else None)
     path = os.path.join(folder, "bench.ckpt.h5")
-    resident, _ = _memory()
+    resident = rss_bytes("VmRSS")
     writes = [_measured(comm, lambda: write_checkpoint(path, sim, _state()))
               for _ in range(repeat)]
     size = os.path.getsize(path)

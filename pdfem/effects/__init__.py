@@ -18,6 +18,7 @@ from pdfem.effects.thermal import (
     TemperatureDependence,
     ThermalExpansion,
     Thermoelastic,
+    ViscousHeating,
 )
 from pdfem.effects.viscosity import BulkViscosity
 
@@ -66,6 +67,7 @@ REGISTRY = {
     "heat": Heat,
     "conduction": Conduction,
     "dissipation_heating": DissipationHeating,
+    "viscous_heating": ViscousHeating,
     "thermoelastic": Thermoelastic,
     "thermal_expansion": ThermalExpansion,
     "temperature_dependence": TemperatureDependence,

@@ -37,7 +37,11 @@ from pdfem.kernels.contact import (
     element_wall_forces,
 )
 from pdfem.kernels.contact_step import accumulate_sorted, contact_dt_min, entry_dt_min, max_speed
-from pdfem.kernels.heat import accumulate_heat_sorted, contact_heat
+from pdfem.kernels.heat import (
+    accumulate_element_heat_sorted,
+    accumulate_heat_sorted,
+    contact_heat,
+)
 from pdfem.kernels.integrate import ACC_CDAMP, ACC_CWORK, ACC_FRIC
 from pdfem.kernels.neighbours import (
     body_boxes,
@@ -233,7 +237,7 @@ class Contact(Effect):
                                        params[sl], us_in[sl], active[sl], nodes[sl],
                                        weights[sl], fnod[sl], us_out[sl], res[sl], s.m, dt)
         self._check(sim, keys, active, res, bad)
-        self._apply(sim, keys, order, active, nodes, weights, fnod, res, pairs)
+        self._apply(sim, keys, order, active, nodes, weights, fnod, res, pairs, welems)
         self._bookkeeping(sim, keys, order, active, us_out, res, pairs, welems)
         self._last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys}
 
@@ -250,20 +254,23 @@ class Contact(Effect):
             sim.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
                      f"and {other} is {what}")
 
-    def _apply(self, sim, keys, order, active, nodes, weights, fnod, res, pairs):
+    def _apply(self, sim, keys, order, active, nodes, weights, fnod, res, pairs, welems):
         """Add forces (and contact heat) to owned nodes in key order (order sorts keys);
         block-side rows are gathered from all ranks."""
         s = sim.store
-        # Heat of each contact on its two sides (this step, over sim.dt)
+        # Heat of each contact on its two sides (this step, over sim.dt), its friction part,
+        # and the elements of the two sides (-1: a wall)
         heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and hasattr(sim, "dt")
-        q = None
+        q = elems = None
         if heat:
-            q = np.zeros((active.shape[0], 2))
+            q = np.zeros((active.shape[0], 4))
             contact_heat(active, nodes, weights, res, s.T, self.heat_h, self.heat_fraction,
-                         sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1])
+                         sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1], q[:, 2], q[:, 3])
+            elems = np.concatenate([pairs, np.stack([welems, np.full(welems.shape[0], -1)],
+                                                    axis=1)]).astype(np.int64)
         # No blocks: every contact is local, already sorted
         if sim.nglobal == 0:
-            self._add(sim, order, active, nodes, weights, fnod, q)
+            self._add(sim, order, active, nodes, weights, fnod, q, elems)
             return
         npair = pairs.shape[0]
         isg = s.isglobal[s.elem_body]
@@ -272,33 +279,46 @@ class Contact(Effect):
         local_nodes = nodes.copy()
         # Canonical orientation puts the grain (lower gid) first: its block side is gathered
         local_nodes[mixed, NNOD // 2:] = -1
+        if heat:
+            elems[mixed, 1] = -1
         sel = np.nonzero(mixed & (active == C_ACTIVE))[0]
-        # Gathered rows carry the two heat columns either way (zero without heat)
-        qsel = q[sel] if heat else np.zeros((sel.shape[0], 2))
+        # Gathered rows carry the four heat columns either way (zero without heat)
+        qsel = q[sel] if heat else np.zeros((sel.shape[0], 4))
         rows = np.concatenate([keys[sel], nodes[sel], weights[sel],
                                fnod[sel].reshape(-1, 2 * NNOD), qsel], axis=1)
         # Columns: keys 0:4, nodes 4:12 (the grain side's cleared), weights, forces, heat
         rows[:, 4:4 + NNOD // 2] = -1
         got = allgather_rows(sim.comm, rows) if sim.comm.size > 1 else rows
         if got.shape[0] == 0:
-            self._add(sim, order, active, local_nodes, weights, fnod, q)
+            self._add(sim, order, active, local_nodes, weights, fnod, q, elems)
             return
         c_w, c_f, c_q = 4 + NNOD, 4 + 2 * NNOD, 4 + 4 * NNOD
-        k_all = np.concatenate([keys, got[:, 0:4].astype(np.int64)])
+        gkeys = got[:, 0:4].astype(np.int64)
+        k_all = np.concatenate([keys, gkeys])
         n_all = np.concatenate([local_nodes, got[:, 4:c_w].astype(np.int64)])
         w_all = np.concatenate([weights, got[:, c_w:c_f]])
         f_all = np.concatenate([fnod, got[:, c_f:c_q].reshape(-1, NNOD, 2)])
         a_all = np.concatenate([active, np.full(got.shape[0], C_ACTIVE, np.int8)])
-        q_all = np.concatenate([q, got[:, c_q:c_q + 2]]) if heat else None
-        self._add(sim, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all)
+        q_all = e_all = None
+        if heat:
+            q_all = np.concatenate([q, got[:, c_q:c_q + 4]])
+            # The block side's element of a gathered row: its body (by gid) and element
+            g0 = sim.nglobal
+            blk = np.searchsorted(s.gid[:g0], gkeys[:, 2])
+            gel = np.stack([np.full(got.shape[0], -1), s.estart[blk] + gkeys[:, 3]], axis=1)
+            e_all = np.concatenate([elems, gel]).astype(np.int64)
+        self._add(sim, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all, e_all)
 
-    def _add(self, sim, order, active, nodes, weights, fnod, q):
-        """Forces (and heat, q not None) of the contacts in the given order to owned nodes."""
+    def _add(self, sim, order, active, nodes, weights, fnod, q, elems):
+        """Forces (and heat, q not None) of the contacts in the given order to owned nodes,
+        and the heat to the owned elements of the two sides (elems) by mechanism."""
         s = sim.store
         accumulate_sorted(order, active, nodes, fnod, s.nn_own, sim.fc)
         if q is not None:
             accumulate_heat_sorted(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own,
                                    sim.heat.src)
+            accumulate_element_heat_sorted(order, active, elems, q[:, 0], q[:, 1], q[:, 2],
+                                           q[:, 3], s.ne_own, s.eheat)
 
     def _bookkeeping(self, sim, keys, order, active, us_out, res, pairs, welems):
         """New history table; contact energy and friction per body of side A (counted once)."""

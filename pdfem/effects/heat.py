@@ -43,6 +43,7 @@ from pdfem.effects.base import Effect
 from pdfem.effects.thermal import fill_column
 from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.heat import (
+    NHEAT,
     advance_temperature,
     conduction_flows,
     conduction_stable_dt,
@@ -74,7 +75,10 @@ FIELDS = (
     Field("tfixv", NODE, (), np.float64),
     Field("hacc", BODY, (2,), np.float64),
     Field("ewp_prev", ELEM, (), np.float64),
+    Field("eheat", ELEM, (NHEAT,), np.float64),
 )
+# Store field of runs with viscous heating: the bulk-viscosity work at the last heat update
+VISCOUS_FIELDS = (Field("ewq_prev", ELEM, (), np.float64),)
 COUPLED_FIELDS = (
     Field("tprev", NODE, (), np.float64),
     Field("eth", ELEM, (3,), np.float64),
@@ -93,10 +97,12 @@ class Heat(Effect):
         self.t_init = float(table["initial"])
         # Element temperatures exist only for the effects that change the stress with them
         self.couple_elements = any(k in scene.resolved for k in COUPLED)
-        self.extra_fields = FIELDS + (COUPLED_FIELDS if self.couple_elements else ())
+        self.extra_fields = (FIELDS + (COUPLED_FIELDS if self.couple_elements else ())
+                             + (VISCOUS_FIELDS if "viscous_heating" in scene.resolved else ()))
         # Parts other effects switch on in their setup
         self.conduction = False
         self.beta = 0.0
+        self.gamma = 0.0
         self.thermoelastic = False
         self.nsub = 1
 
@@ -151,12 +157,14 @@ class Heat(Effect):
         s = sim.store
         dt = sim.dt
         with sim.timers.phase("heat"):
-            # Element sources: dissipation heating, thermo-elastic coupling
-            if self.beta > 0.0 or self.thermoelastic:
-                tau_prev = s.tau_prev if self.thermoelastic else self.eh
+            # Element sources: dissipation, viscous heating, thermo-elastic coupling
+            if self.beta > 0.0 or self.gamma > 0.0 or self.thermoelastic:
+                none = np.empty(0)
+                tau_prev = s.tau_prev if self.thermoelastic else none
+                ewq, ewq_prev = (s.ewq, s.ewq_prev) if self.gamma > 0.0 else (none, none)
                 element_heat(s.x, s.T, s.conn, s.emat, sim.mat_params, s.sig, s.ewp,
-                             s.ewp_prev, tau_prev, self.beta, self.thermoelastic, 0, s.ne_own,
-                             self.eh)
+                             s.ewp_prev, ewq, ewq_prev, tau_prev, self.beta, self.gamma,
+                             self.thermoelastic, 0, s.ne_own, self.eh, s.eheat)
                 element_to_nodes(s.x, s.conn, 0, s.ne_own, self.eh, self.src)
             _body_node_sums(self.src, s.node_body, s.nn_own, s.hacc[:, HACC_SRC])
             # Conduction sub-steps (the sources enter with the first)
@@ -198,6 +206,10 @@ class Heat(Effect):
         paid = np.zeros(nb)
         if self.beta > 0.0:
             body_sums(self.beta * s.ewp[:ne], s.estart[:nb], s.ne[:nb], paid)
+        if self.gamma > 0.0:
+            viscous = np.empty(nb)
+            body_sums(s.ewq[:ne], s.estart[:nb], s.ne[:nb], viscous)
+            paid += self.gamma * viscous
         fraction = self.friction_fraction(sim)
         if fraction > 0.0:
             paid += fraction * s.acc[:nb, ACC_FRIC]

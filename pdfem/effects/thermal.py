@@ -6,6 +6,7 @@ kernels read and tell the heat effect what to run.
 
     [conduction]              conduction within each body (materials' conductivity)
     [dissipation_heating]     beta x plastic work heats the element (report eq. 48)
+    [viscous_heating]         a fraction of the bulk-viscosity work heats the element
     [thermoelastic]           -3 K alpha T d(volume) heats a compressed element (eq. 48)
     [thermal_expansion]       isotropic thermal strain alpha dT in the stress update
     [temperature_dependence]  moduli and strength soften linearly with T (material.softened)
@@ -38,6 +39,19 @@ class DissipationHeating(Effect):
 
     def setup(self, sim):
         sim.heat.beta = float(self.table["beta"])
+
+
+class ViscousHeating(Effect):
+    """A fraction of the work of the artificial bulk viscosity heats the element.
+
+    The viscosity stands in for the dissipation a shock front does over a width the mesh
+    cannot resolve; that dissipation is heat, so a thermal run through a shock wants it.
+    """
+
+    name = "viscous_heating"
+
+    def setup(self, sim):
+        sim.heat.gamma = float(self.table["fraction"])
 
 
 class Thermoelastic(Effect):

@@ -38,7 +38,7 @@ from mpi4py import MPI
 
 from pdfem import __version__
 from pdfem.errors import InputError
-from pdfem.io.gather import block_bounds, to_blocks
+from pdfem.io.gather import block_bounds, block_owner, to_blocks
 from pdfem.parallel.mpi import alltoallv
 from pdfem.store import BODY, ELEM, NODE, Batch, ranges
 
@@ -138,8 +138,7 @@ def _history_blocks(comm, s, nglobal, ngrain, nbody):
     rows = np.concatenate([np.column_stack([h[m], key[m], val[m]]).astype(np.float64)
                            for h, m in homes]) if key.shape[0] else np.zeros((0, 6))
     # Each row to the rank whose block of bodies holds its body
-    lo_of = np.array([block_bounds(nbody, comm.size, r)[0] for r in range(comm.size)])
-    dest = np.searchsorted(lo_of, rows[:, 0], side="right") - 1
+    dest = block_owner(rows[:, 0], nbody, comm.size)
     got = alltoallv(comm, [rows[dest == r].ravel() for r in range(comm.size)])
     mine = np.concatenate([g.reshape(-1, 6) for g in got])
     lo, hi = block_bounds(nbody, comm.size, comm.rank)

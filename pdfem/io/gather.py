@@ -15,6 +15,12 @@ def block_bounds(n, size, rank):
     return n * rank // size, n * (rank + 1) // size
 
 
+def block_owner(index, n, size):
+    """The rank whose block of [0, n) (:func:`block_bounds`) holds each global index."""
+    lo_of = np.array([block_bounds(n, size, r)[0] for r in range(size)])
+    return np.searchsorted(lo_of, index, side="right") - 1
+
+
 def to_blocks(comm, index, rows, n):
     """Send rows (m, k) with global indices (m,) to their block owners.
 
@@ -26,10 +32,7 @@ def to_blocks(comm, index, rows, n):
     # Columns per row from the trailing shape (a rank with no rows still knows it)
     k = int(np.prod(rows.shape[1:], dtype=np.int64)) if rows.ndim > 1 else 1
     rows = rows.reshape(index.shape[0], k)
-    dest = np.minimum((index * size) // max(n, 1), size - 1) if n else np.zeros(0, np.int64)
-    # Exact block owner (integer division can be off by one at block edges)
-    lo_of = np.array([block_bounds(n, size, r)[0] for r in range(size)] + [n])
-    dest = np.searchsorted(lo_of, index, side="right") - 1
+    dest = block_owner(index, n, size)
     order = np.argsort(dest, kind="stable")
     bufs = []
     for r in range(size):

@@ -32,6 +32,7 @@ from pdfem.io.segments import (
     start_join,
 )
 from pdfem.io.xdmf import write_xdmf
+from pdfem.kernels.heat import H_CONDUCTED, H_FRICTION, H_PLASTIC, H_THERMOELASTIC, H_VISCOUS
 from pdfem.store import ranges
 
 
@@ -62,6 +63,11 @@ def field_table(sim):
         "kappa": lambda n, e: s.mst[e, :, 0].mean(axis=1),
         "plastic_strain": lambda n, e: s.mst[e, :, 2:6].mean(axis=1),
         "element_temperature": lambda n, e: s.T[s.conn[e]].mean(axis=1),
+        "heat_plastic": lambda n, e: s.eheat[e, H_PLASTIC],
+        "heat_viscous": lambda n, e: s.eheat[e, H_VISCOUS],
+        "heat_thermoelastic": lambda n, e: s.eheat[e, H_THERMOELASTIC],
+        "heat_friction": lambda n, e: s.eheat[e, H_FRICTION],
+        "heat_conducted": lambda n, e: s.eheat[e, H_CONDUCTED],
     }
     return {name: (per, tuple(sim.nip if n is None else n for n in tail), values[name])
             for name, (per, tail) in FRAME_LAYOUT.items()}

@@ -15,4 +15,9 @@ FRAME_LAYOUT = {
     "kappa": ("elem", ()),
     "plastic_strain": ("elem", (4,)),
     "element_temperature": ("elem", ()),
+    "heat_plastic": ("elem", ()),
+    "heat_viscous": ("elem", ()),
+    "heat_thermoelastic": ("elem", ()),
+    "heat_friction": ("elem", ()),
+    "heat_conducted": ("elem", ()),
 }

@@ -128,32 +128,52 @@ def kirchhoff_pressure(x, conn, sig, e0, e1, out):
         out[e] = _tau(x, conn, sig, e)
 
 
+# Columns of the per-element heat by mechanism (cumulative since t = 0) [J/m]
+H_PLASTIC = 0  # beta x plastic work
+H_VISCOUS = 1  # fraction x bulk-viscosity work
+H_THERMOELASTIC = 2  # 3 alpha T d(p A)
+H_FRICTION = 3  # fraction x frictional dissipation at the element's contacts
+H_CONDUCTED = 4  # net heat received across its contacts (conductance; sums to zero)
+NHEAT = 5
+
+
 @njit(cache=True)
-def element_heat(x, temp, conn, emat, mat_params, sig, ewp, ewp_prev, tau_prev, beta,
-                 thermoelastic, e0, e1, out):
+def element_heat(x, temp, conn, emat, mat_params, sig, ewp, ewp_prev, ewq, ewq_prev, tau_prev,
+                 beta, gamma, thermoelastic, e0, e1, out, eheat):
     """Heat [J/m] this step's sources put into each element e in [e0, e1): out[e] = ...
 
     beta (ewp[e] - ewp_prev[e])                 dissipation heating (plastic work, eq. 48)
     3 alpha T_e (tau_e - tau_prev[e])           thermo-elastic coupling (when thermoelastic)
+    gamma (ewq[e] - ewq_prev[e])                viscous heating (bulk-viscosity work)
     with T_e the mean nodal temperature and tau = p A (:func:`kirchhoff_pressure`, from the
     stress just updated). For a small elastic change, tau - tau_prev = -K A d(eps_v,elastic)
     + p dA, so this is eq. 48's -3 K alpha T dV with the elastic volume change, plus the
     pressure's share that makes -3 alpha T p A the coupling's energy (see pdfem.effects.heat).
-    ewp_prev and tau_prev are then set to the new values. beta = 0 skips the first term,
-    thermoelastic = False the second.
+    ewp_prev, ewq_prev and tau_prev are then set to the new values. beta = 0 skips the first
+    term, thermoelastic = False the second, gamma = 0 the third (their arrays may then be
+    empty). Each term is also added to its column of eheat[e] (H_PLASTIC, ...).
     """
     for e in range(e0, e1):
         h = 0.0
         if beta > 0.0:
-            h += beta * (ewp[e] - ewp_prev[e])
+            hp = beta * (ewp[e] - ewp_prev[e])
+            h += hp
+            eheat[e, H_PLASTIC] += hp
             ewp_prev[e] = ewp[e]
         if thermoelastic:
             tau = _tau(x, conn, sig, e)
             te = 0.0
             for i in range(4):
                 te += 0.25 * temp[conn[e, i]]
-            h += 3.0 * mat_params[emat[e], ALPHA] * te * (tau - tau_prev[e])
+            ht = 3.0 * mat_params[emat[e], ALPHA] * te * (tau - tau_prev[e])
+            h += ht
+            eheat[e, H_THERMOELASTIC] += ht
             tau_prev[e] = tau
+        if gamma > 0.0:
+            hv = gamma * (ewq[e] - ewq_prev[e])
+            h += hv
+            eheat[e, H_VISCOUS] += hv
+            ewq_prev[e] = ewq[e]
         out[e] = h
 
 
@@ -201,8 +221,9 @@ def thermal_energy(temp, t0, cap, node_body, n1, out):
 
 @njit(cache=True)
 def contact_heat(active, nodes, weights, res, temp, h, fraction, dt, width_col, diss_col,
-                 qa, qb):
-    """Heat [J/m] of each active contact p on its side A (qa) and side B (qb) this step.
+                 qa, qb, fa, fb):
+    """Heat [J/m] of each active contact p on its side A (qa) and side B (qb) this step, and
+    the friction part of each (fa, fb).
 
     Conductance: h w (T_B - T_A) dt flows from B to A (w the contact width res[p, width_col],
     T_A, T_B the temperatures at the contact point of the two sides: weights[p, 0:4] and
@@ -213,15 +234,20 @@ def contact_heat(active, nodes, weights, res, temp, h, fraction, dt, width_col, 
     for p in range(active.shape[0]):
         qa[p] = 0.0
         qb[p] = 0.0
+        fa[p] = 0.0
+        fb[p] = 0.0
         if active[p] != 1:
             continue
         # Friction heat, split between the sides
         fr = fraction * res[p, diss_col]
         if nodes[p, 4] < 0:
             qa[p] += fr
+            fa[p] = fr
             continue
         qa[p] += 0.5 * fr
         qb[p] += 0.5 * fr
+        fa[p] = 0.5 * fr
+        fb[p] = 0.5 * fr
         # Conductance across the contact
         if h > 0.0:
             ta = 0.0
@@ -232,6 +258,28 @@ def contact_heat(active, nodes, weights, res, temp, h, fraction, dt, width_col, 
             flow = h * res[p, width_col] * (tb - ta) * dt
             qa[p] += flow
             qb[p] -= flow
+
+
+@njit(cache=True)
+def accumulate_element_heat_sorted(order, active, elems, qa, qb, fa, fb, n_owned, eheat):
+    """eheat[e, H_FRICTION] += fa and eheat[e, H_CONDUCTED] += qa - fa for the element e =
+    elems[p, 0] of side A (fb, qb - fb for elems[p, 1] of side B), contacts in the given order.
+
+    Only owned elements 0 <= e < n_owned receive heat (-1 marks a side that is not added
+    here); pass contacts sorted by global key.
+    """
+    for i in range(order.shape[0]):
+        p = order[i]
+        if active[p] != 1:
+            continue
+        e = elems[p, 0]
+        if 0 <= e < n_owned:
+            eheat[e, H_FRICTION] += fa[p]
+            eheat[e, H_CONDUCTED] += qa[p] - fa[p]
+        e = elems[p, 1]
+        if 0 <= e < n_owned:
+            eheat[e, H_FRICTION] += fb[p]
+            eheat[e, H_CONDUCTED] += qb[p] - fb[p]
 
 
 @njit(cache=True)

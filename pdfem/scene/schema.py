@@ -16,8 +16,11 @@ __all__ = ["OPTIONAL", "REQUIRED", "Derived", "Key", "Section"]
 # Names of materials and blocks
 NAME_PATTERN = r"[A-Za-z_][A-Za-z0-9_-]*"
 SIDES = ("left", "right", "bottom", "top")
+# Element heat by mechanism (cumulative since t = 0), frame fields of a run with [heat]
+HEAT_FIELDS = ("heat_plastic", "heat_viscous", "heat_thermoelastic", "heat_friction",
+               "heat_conducted")
 OUTPUT_FIELDS = ("x", "v", "stress", "temperature", "kappa", "plastic_strain",
-                 "element_temperature", "contact_force")
+                 "element_temperature", "contact_force") + HEAT_FIELDS
 
 # [domain]
 DOMAIN = {
@@ -197,6 +200,9 @@ HEAT = {"initial": _pos("float", 293.15, "initial temperature of every node", "K
 CONDUCTION = {}
 DISSIPATION_HEATING = {"beta": Key("float", 0.9, "fraction of the plastic work that becomes "
                                    "heat (Taylor-Quinney)", lo=0.0, hi=1.0)}
+VISCOUS_HEATING = {"fraction": Key("float", 1.0, "fraction of the bulk-viscosity work that "
+                                   "becomes heat in the element", lo=0.0, hi=1.0,
+                                   lo_open=True)}
 THERMOELASTIC = {}
 THERMAL_EXPANSION = {}
 TEMPERATURE_DEPENDENCE = {}
@@ -312,12 +318,15 @@ OUTPUT = {
                 "its directory must exist and be writable"),
     "interval": _pos("float", Derived("time.end / 20"), "time between output frames", "s"),
     "fields": Key("strlist", Derived('["x", "v", "stress"]; "kappa", "plastic_strain" with a '
-                                     'cap material; "temperature", "element_temperature" with '
-                                     '[heat]'),
+                                     'cap material; "temperature", "element_temperature" and '
+                                     'the five heat_* fields with [heat]'),
                   "node fields (x, v, temperature, contact_force) and element fields (stress "
                   "per integration point; element means of kappa, plastic_strain (xx, yy, xy, "
-                  "zz), element_temperature) written per frame; contact_force = the nodal "
-                  "force of the contacts (needs [contact])", choices=OUTPUT_FIELDS),
+                  "zz), element_temperature; the heat each element received since t = 0 "
+                  "[J/m] by mechanism: heat_plastic, heat_viscous, heat_thermoelastic, "
+                  "heat_friction, heat_conducted (net, across its contacts)) written per "
+                  "frame; contact_force = the nodal force of the contacts (needs [contact])",
+                  choices=OUTPUT_FIELDS),
     "energy_interval": _pos("float", Derived("interval / 10"), "time between energy-balance "
                             "samples", "s"),
     "gauge_interval": _pos("float", Derived("energy_interval / 10"), "time between gauge "
@@ -391,6 +400,9 @@ SECTIONS = [
             "table switches it on.", CONDUCTION),
     Section("dissipation_heating", "table", "A fraction beta of the plastic work heats the "
             "element where it is done.", DISSIPATION_HEATING),
+    Section("viscous_heating", "table", "A fraction of the work of the artificial bulk "
+            "viscosity (the dissipation of a shock front narrower than the mesh) heats the "
+            "element (needs [bulk_viscosity]).", VISCOUS_HEATING),
     Section("thermoelastic", "table", "Thermo-elastic coupling: heat 3 alpha T d(p A) of each "
             "element (p its pressure, A its area: -3 K alpha T dV of the elastic volume change "
             "plus the pressure's share); needs [thermal_expansion], every material needs "
@@ -428,6 +440,6 @@ SECTIONS = [
 PRESENCE_TABLES = ("gravity", "damping", "bulk_viscosity", "grains_file", "walls", "contact",
                    "heat", "conduction", "dissipation_heating", "thermoelastic",
                    "thermal_expansion", "temperature_dependence", "contact_conductance",
-                   "friction_heating")
+                   "friction_heating", "viscous_heating")
 # The heat effects: each needs [heat]
 HEAT_EFFECTS = PRESENCE_TABLES[7:]

@@ -301,6 +301,8 @@ def _heat_rules(r):
     for name in ("contact_conductance", "friction_heating"):
         if name in r and "contact" not in r:
             raise SceneError(name, "needs the [contact] table")
+    if "viscous_heating" in r and "bulk_viscosity" not in r:
+        raise SceneError("viscous_heating", "needs the [bulk_viscosity] table")
     if "thermal_bc" in r:
         if "heat" not in r:
             raise SceneError("thermal_bc", "needs the [heat] table (the temperature field)")
@@ -314,9 +316,11 @@ def _output(value, t_end, heat, cap=False, contact=False):
     o = check_table(value, S.OUTPUT, "output")
     if "fields" not in o:
         o["fields"] = (["x", "v", "stress"] + (["kappa", "plastic_strain"] if cap else [])
-                       + (["temperature", "element_temperature"] if heat else []))
+                       + (["temperature", "element_temperature", *S.HEAT_FIELDS] if heat
+                          else []))
     for name, ok, need in (("temperature", heat, "the [heat] table"),
                            ("element_temperature", heat, "the [heat] table"),
+                           *((f, heat, "the [heat] table") for f in S.HEAT_FIELDS),
                            ("kappa", cap, "a cap material"),
                            ("plastic_strain", cap, "a cap material"),
                            ("contact_force", contact, "the [contact] table")):

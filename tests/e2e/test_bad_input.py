@@ -9,6 +9,7 @@ added, none changed: nothing overwritten without --force, nothing partial left b
 """
 
 import hashlib
+import json
 import os
 import shutil
 import subprocess
@@ -19,6 +20,7 @@ import h5py
 import numpy as np
 import pytest
 
+from pdfem.scene.schema import OUTPUT_FIELDS
 from pdfem.scene.toml_out import dumps
 from tests.e2e.test_cli import datasets, pdfem
 from tests.scenes import drifting_grains, prep_scene, shock_scene, small_prepare
@@ -34,9 +36,8 @@ SHOCK = shock_scene("none.h5", 1.0e-3, end=2e-7).replace(
 # The shock scene with [heat] and every frame field the run file can hold
 EVERY_FIELD = SHOCK.replace("kappa0 = -1.0e9\n", "kappa0 = -1.0e9\nspecific_heat = 1444.0\n") \
     .replace("kappa0 = -5.0e9\n", "kappa0 = -5.0e9\nspecific_heat = 450.0\n") \
-    .replace("interval = 5.0e-8\n", "interval = 5.0e-8\nfields = [\"x\", \"v\", \"stress\", "
-             "\"temperature\", \"kappa\", \"plastic_strain\", \"element_temperature\", "
-             "\"contact_force\"]\n") + "\n[heat]\n"
+    .replace("interval = 5.0e-8\n", "interval = 5.0e-8\nfields = "
+             f"{json.dumps(list(OUTPUT_FIELDS))}\n") + "\n[heat]\n"
 
 
 def _scene(**edits):

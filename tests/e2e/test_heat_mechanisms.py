@@ -1,0 +1,89 @@
+"""Heat by mechanism: the per-element fields add up to what the sources put in, each equals
+its paying mechanical term, and the run files are the same on 1 and 2 ranks."""
+
+import numpy as np
+import pytest
+
+from pdfem.scene.schema import HEAT_FIELDS
+from tests.e2e.test_cli import datasets, pdfem
+from tests.scenes import packaged, write_scene
+
+BETA, GAMMA, FRACTION = 0.9, 0.8, 0.7
+
+
+def thermal_shot(end=4.0e-7):
+    """The packaged small piston shot with every heat effect on, viscous heating included."""
+    doc = packaged("shot912_small.toml")
+    doc["time"]["end"] = end
+    for name in ("heat", "thermoelastic", "thermal_expansion", "conduction"):
+        doc[name] = {}
+    doc["dissipation_heating"] = {"beta": BETA}
+    doc["viscous_heating"] = {"fraction": GAMMA}
+    doc["friction_heating"] = {"fraction": FRACTION}
+    doc["contact_conductance"] = {"h": 1.0e8}
+    doc.pop("shock")
+    doc["output"].update(path="hot.h5", interval=end / 4, energy_interval=end / 4)
+    return doc
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory):
+    """The thermal shot on 1 rank, and on 2 ranks with checkpoints: (folder, h1, h2)."""
+    d = tmp_path_factory.mktemp("hot")
+    doc = thermal_shot()
+    write_scene(d / "hot.toml", doc)
+    doc["output"]["checkpoint_interval"] = 1.5e-7
+    write_scene(d / "hot_ckpt.toml", doc)
+    for n, scene in ((1, "hot.toml"), (2, "hot_ckpt.toml")):
+        p = pdfem(["run", scene, "-o", f"h{n}.h5", "--quiet"], d, ranks=n)
+        assert p.returncode == 0, p.stderr
+    return d, datasets(d / "h1.h5"), datasets(d / "h2.h5")
+
+
+def test_heat_by_mechanism_sums_to_the_sources_and_is_rank_count_free(runs):
+    _, one, two = runs
+    assert sorted(one) == sorted(two)
+    for k in one:
+        assert np.array_equal(one[k], two[k]), f"{k} differs on 2 ranks"
+    # Every frame: the mechanisms sum to the heat the sources put in (frames coincide with
+    # energy samples here), and each equals its share of the term that pays for it
+    t, et = one["frames/time"], one["energy/time"]
+    assert len(t) == 5 and all(f"frames/{f}" in one for f in HEAT_FIELDS)
+    for k in range(len(t)):
+        j = int(np.argmin(abs(et - t[k])))
+        assert et[j] == pytest.approx(t[k], rel=1e-9, abs=1e-15)
+        mech = {f: one[f"frames/{f}"][k].sum() for f in HEAT_FIELDS}
+        src = one["energy/heat_sources"][j]
+        scale = max(abs(src), 1e-30)
+        assert abs(sum(mech.values()) - src) <= 1e-12 * scale, (k, mech, src)
+        assert mech["heat_plastic"] == pytest.approx(BETA * one["energy/plastic"][j],
+                                                     rel=1e-10, abs=1e-14)
+        assert mech["heat_viscous"] == pytest.approx(GAMMA * one["energy/viscous"][j],
+                                                     rel=1e-10, abs=1e-14)
+        assert mech["heat_friction"] == pytest.approx(FRACTION * one["energy/friction"][j],
+                                                      rel=1e-10, abs=1e-14)
+        # Conductance only moves heat between elements
+        assert abs(mech["heat_conducted"]) <= 1e-10 * scale
+    # By the end each mechanism has heated the bed, and the balance closes with every source
+    # paid: beta D_plastic + gamma D_viscous + fraction D_friction
+    last = {f: one[f"frames/{f}"][-1].sum() for f in HEAT_FIELDS}
+    assert min(last["heat_plastic"], last["heat_viscous"], last["heat_friction"]) > 0.0
+    assert last["heat_thermoelastic"] != 0.0
+    paid = (BETA * one["energy/plastic"] + GAMMA * one["energy/viscous"]
+            + FRACTION * one["energy/friction"])
+    assert np.allclose(one["energy/heat_paid"], paid, rtol=1e-12, atol=1e-12 * paid.max())
+    assert one["energy/balance_error"].max() < 1e-3
+
+
+def test_restart_continues_the_heat_by_mechanism(runs):
+    """The 2-rank run's last checkpoint continued on 1 rank: the heat fields of the later
+    frames equal the uninterrupted run's (they are part of the checkpointed state)."""
+    d, one, _ = runs
+    p = pdfem(["run", "hot_ckpt.toml", "--restart", "h2.h5.ckpt.h5", "-o", "r.h5", "--quiet"],
+              d, ranks=1)
+    assert p.returncode == 0, p.stderr
+    r = datasets(d / "r.h5")
+    nb = r["frames/time"].shape[0] - 1
+    assert nb >= 1
+    for k in ("frames/time", "frames/temperature") + tuple(f"frames/{f}" for f in HEAT_FIELDS):
+        assert np.array_equal(one[k][-nb:], r[k][1:]), k

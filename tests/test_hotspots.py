@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from pdfem.analysis.hotcensus import census
-from pdfem.analysis.hotfront import arrival_times, front_history
+from pdfem.analysis.hotfront import FrontRelative, arrival_times, front_history
 from pdfem.analysis.hotgeom import components, segment_distance
 from pdfem.analysis.hotspots import weighted_percentiles
 from pdfem.analysis.runfile import read_run
@@ -122,6 +122,24 @@ def test_weighted_percentiles_closed_form():
     assert np.isnan(weighted_percentiles([], [], [50])).all()
 
 
+def test_front_relative_bins_on_uneven_frames():
+    """Frames a little uneven: each element still gives one sample per bin, and a bin's
+    time is its samples' mean time since arrival."""
+    rng = np.random.default_rng(5)
+    t = np.arange(40) * 1e-8 + rng.uniform(-1e-10, 1e-10, 40)
+    t[0] = 0.0
+    ta = rng.uniform(0.0, 2e-7, 300)
+    fr = FrontRelative(t, ta, np.arange(300), np.ones(300))
+    for k in range(40):
+        fr.add(k, COLD + RATE * np.maximum(t[k] - ta, 0.0))
+    h = fr.result()
+    first = np.searchsorted(t, ta)
+    assert max(h["n"]) == 300 and h["frames"] == list(range(-first.max(), 40 - first.min()))
+    j = h["frames"].index(3)
+    assert h["tau"][j] == pytest.approx(np.mean(t[first + 3] - ta))
+    assert h["mean"][j] == pytest.approx(COLD + RATE * h["tau"][j])
+
+
 def test_geometry_helpers():
     """Segment distances and connected components on small cases."""
     z = np.zeros((1, 2))
@@ -231,9 +249,10 @@ def test_shock_run_regions_and_front_relative_history(tmp_path):
     h = res["front_relative"]
     assert h["n_elements"] == ng and h["dt"] == pytest.approx(run.time[1] - run.time[0])
     tau, mean, n = (np.array(h[k]) for k in ("tau", "mean", "n"))
+    assert n.max() == ng and np.all(np.diff(h["frames"]) == 1)
     ok = (tau > tol) & (n >= 10)
     assert ok.sum() > 50
-    assert np.all(np.abs(mean[ok] - (COLD + RATE * (tau[ok] + 0.5 * h["dt"]))) < RATE * tol)
+    assert np.all(np.abs(mean[ok] - (COLD + RATE * tau[ok])) < RATE * tol)
     assert np.all(np.array(h["p99"])[ok] >= mean[ok])
     assert np.allclose(np.array(h["mean"])[tau < -tol], COLD)
     last = res["frames"][-1]
@@ -261,7 +280,8 @@ def test_cli_writes_csv_json_and_plots(tmp_path, capsys):
     assert main(["hotspots", str(tmp_path / "shock.h5"), "-o", str(tmp_path / "s"),
                  "--plots", "pdf"]) == 0
     front = (tmp_path / "s-hotspots-front.csv").read_text().splitlines()
-    assert front[0].startswith("time_since_arrival,n_elements") and len(front) > 50
+    assert front[0].startswith("frames_since_arrival,time_since_arrival,n_elements")
+    assert len(front) > 50
     for name in ("map", "distribution", "count", "front"):
         assert (tmp_path / f"s-hotspots-{name}.pdf").read_bytes()[:4] == b"%PDF"
     assert not list(tmp_path.glob("*.part"))

@@ -113,7 +113,7 @@ def census(path, thresholds=DEFAULT_THRESHOLDS, spot_threshold=None,
             sel = np.flatnonzero(behind)
             row["shocked"] = {**distribution(temp[sel], mass[sel], area[sel], thresholds),
                               "front_y": float(front["y_f"][k])}
-            history.add(t, temp)
+            history.add(k, temp)
         rows = _spot_rows(found, k, t, behind, area)
         if front is not None:
             row["shocked"].update(_region(rows, "behind_front"))

@@ -53,47 +53,52 @@ def arrival_times(time, y_f, heights):
 class FrontRelative:
     """Temperature of the elements the front crosses against time since it arrived.
 
-    Each frame k gives every element with an arrival time t_a the sample (t_k - t_a, T).
-    Samples are binned on the frame interval dt (the median spacing of the frame times):
-    bin j holds time since arrival in [j dt, (j + 1) dt), so an element gives one sample per
-    bin; before arrival j is negative. Per bin: the elements' count, and their mass-weighted
-    mean and percentiles (:func:`pdfem.analysis.hotspots.weighted_percentiles`).
+    Binned on the frame times: an element's arrival frame is the first frame at or after
+    its arrival time t_a, and frame k falls in bin j = k - (arrival frame), so every element
+    gives exactly one sample to each bin it reaches (j < 0: before the front arrived). A
+    bin's time since arrival is the mean of its samples' t_k - t_a; with frames dt apart it
+    lies in [j dt, (j + 1) dt). Per bin: the elements' count, and their mass-weighted mean
+    and percentiles (:func:`pdfem.analysis.hotspots.weighted_percentiles`).
     """
 
     def __init__(self, time, arrival, elems, mass):
-        dt = np.diff(time)
-        self.dt = float(np.median(dt)) if dt.size and np.median(dt) > 0 else NAN
+        self.time = np.asarray(time, float)
+        dt = np.diff(self.time)
+        self.dt = float(np.median(dt)) if dt.size else NAN
         crossed = np.isfinite(arrival[elems])
         self.elems, self.arrival = elems[crossed], arrival[elems][crossed]
+        self.first = np.searchsorted(self.time, self.arrival, side="left")
         self.mass = mass[self.elems]
-        self.bins, self.temps, self.masses = [], [], []
+        self.bins, self.taus, self.temps = [], [], []
 
-    def add(self, t, temp):
-        """Samples of the frame at time ``t`` with element temperatures ``temp`` (NE,)."""
-        if not (self.elems.size and np.isfinite(self.dt)):
+    def add(self, k, temp):
+        """Samples of frame ``k`` with element temperatures ``temp`` (NE,)."""
+        if not self.elems.size:
             return
-        tau = t - self.arrival
-        # A small tolerance keeps a sample on the bin edge it was meant for
-        self.bins.append(np.floor(tau / self.dt + 1e-9).astype(np.int64))
+        self.bins.append(k - self.first)
+        self.taus.append(self.time[k] - self.arrival)
         self.temps.append(temp[self.elems])
-        self.masses.append(self.mass)
 
     def result(self):
-        """{"tau": bin starts (J,) [s], "dt", "n", "mass", "mean", "p50", "p90", "p99"} as
-        lists; empty when the front crossed no element."""
-        keys = ("tau", "n", "mass", "mean") + tuple(f"p{p:g}" for p in FRONT_PERCENTILES)
+        """{"frames": bin offsets j (J,), "tau": mean time since arrival (J,) [s], "n",
+        "mass", "mean", "p50", "p90", "p99"} as lists, with "dt" (the median frame interval)
+        and "n_elements" (the elements crossed); empty lists when none was."""
+        keys = ("frames", "tau", "n", "mass", "mean") + tuple(f"p{p:g}"
+                                                              for p in FRONT_PERCENTILES)
         out = {k: [] for k in keys}
         out["dt"] = self.dt
         out["n_elements"] = int(self.elems.size)
         if not self.bins:
             return out
-        b, tt, mm = (np.concatenate(a) for a in (self.bins, self.temps, self.masses))
+        b, tau, tt = (np.concatenate(a) for a in (self.bins, self.taus, self.temps))
+        mm = np.tile(self.mass, len(self.bins))
         order = np.argsort(b, kind="stable")
-        b, tt, mm = b[order], tt[order], mm[order]
+        b, tau, tt, mm = b[order], tau[order], tt[order], mm[order]
         starts = np.flatnonzero(np.r_[True, b[1:] != b[:-1]])
         for s, e in zip(starts, np.r_[starts[1:], b.size], strict=True):
             t, m = tt[s:e], mm[s:e]
-            out["tau"].append(float(b[s] * self.dt))
+            out["frames"].append(int(b[s]))
+            out["tau"].append(float(tau[s:e].mean()))
             out["n"].append(int(e - s))
             out["mass"].append(float(m.sum()))
             out["mean"].append(float(t @ m / m.sum()))

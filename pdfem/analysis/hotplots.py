@@ -132,7 +132,7 @@ def front_plot(result, path, fmt):
     """Temperature against time since the front arrived: mean and percentiles, and the
     number of elements in each bin."""
     h = result["front_relative"]
-    tau = (np.array(h["tau"], float) + 0.5 * h["dt"]) * US
+    tau = np.array(h["tau"], float) * US
     fig, (a1, a2) = plt.subplots(2, 1, figsize=(6.4, 6.0), sharex=True,
                                  gridspec_kw={"height_ratios": (3, 1)})
     for key, style, name in (("mean", "k-", "mean"), ("p50", "C0-", "50th"),

@@ -78,12 +78,12 @@ def spots_csv(result):
 
 
 def front_csv(result):
-    """One row per bin of time since the front arrived."""
+    """One row per bin of time since the front arrived (frames since the arrival frame)."""
     h = result["front_relative"]
-    keys = ["n", "mass", "mean", "p50", "p90", "p99"]
-    header = ["time_since_arrival", "n_elements", "mass", "T_mean", "T_p50", "T_p90",
-              "T_p99"]
-    return _csv(header, [[h["tau"][i]] + [h[k][i] for k in keys] for i in range(len(h["tau"]))])
+    keys = ["frames", "tau", "n", "mass", "mean", "p50", "p90", "p99"]
+    header = ["frames_since_arrival", "time_since_arrival", "n_elements", "mass", "T_mean",
+              "T_p50", "T_p90", "T_p99"]
+    return _csv(header, [[h[k][i] for k in keys] for i in range(len(h["tau"]))])
 
 
 def write_outputs(result, maps, prefix, plots="png"):

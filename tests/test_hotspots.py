@@ -275,6 +275,9 @@ def test_cli_writes_csv_json_and_plots(tmp_path, capsys):
     for name in ("map", "distribution", "count"):
         assert (tmp_path / f"bed-hotspots-{name}.png").read_bytes()[:4] == b"\x89PNG"
     assert not (tmp_path / "bed-hotspots-front.csv").exists()
+    assert main(["hotspots", path, "-o", str(tmp_path / "n"), "--plots", "none"]) == 0
+    assert sorted(p.name for p in tmp_path.glob("n-*")) == \
+        ["n-hotspots-spots.csv", "n-hotspots.csv", "n-hotspots.json"]
     # A shock run: the front-relative CSV and figure too, here as PDF
     _shock_run(str(tmp_path / "shock.h5"))
     assert main(["hotspots", str(tmp_path / "shock.h5"), "-o", str(tmp_path / "s"),

@@ -1,4 +1,5 @@
-"""Bad input never hurts, beyond ``run``: mutated inputs of prepare, material, export, analyse.
+"""Bad input never hurts, beyond ``run``: mutated inputs of prepare, material, export, analyse,
+hotspots.
 
 Each example mutates one input once and runs the command in process through
 ``pdfem.cli.main``. The command either succeeds (the mutant was still valid: its outputs are
@@ -12,8 +13,8 @@ half-written VTU, summary or figure) left behind. The classes:
 - material: the material tables through the same mutator, and the command's options
   (--material, --strain, --axial, --nsub, --path as a name, a folder, a missing file or a
   mutated CSV, --out); a material path the model cannot follow exits 3 with one line;
-- export and analyse: a real run file and a real shock run file (built once) copied and one
-  dataset, group or attribute deleted, replaced by strings, a group, another dtype or shape,
+- export, analyse and hotspots: a real run file and a real shock run file (built once) copied
+  and one dataset, group or attribute deleted, replaced by strings, a group, another dtype or shape,
   one value made NaN, infinite, negative or huge, the scene attribute replaced by garbage,
   or the file truncated (and, in the long mode only, bytes overwritten in place: the HDF5
   library can loop forever inside its own code on some damaged metadata, beyond any alarm);
@@ -395,12 +396,20 @@ def test_mutated_shock_run_analyses_or_exits_2(runs, data):
     _export_or_analyse(data, runs, "analyse")
 
 
+@_settings(150)
+@given(data=st.data())
+def test_mutated_thermal_run_hotspots_or_exits_2(runs, data):
+    _export_or_analyse(data, runs, "hotspots")
+
+
 # ---------------------------------------------------------------- command-line arguments
 
 # Arguments of each command (a placeholder in <>: a path in the example's folder)
 COMMAND_ARGS = {
     "export": ["<run>", "--format", "--frames", "-p", "--force"],
     "analyse": ["<shock>", "-p", "--force"],
+    "hotspots": ["<shock>", "-o", "--thresholds", "--spot-threshold", "--contact-tol",
+                 "--corner-angle", "--plots", "--force"],
     "prepare": ["<prepare>", "-o", "--force"],
     "material": ["<material>", "--material", "--strain", "--axial", "--nsub", "--path",
                  "--out"],
@@ -443,7 +452,7 @@ def test_odd_command_line_runs_or_exits_2(runs, call):
         args = _placeholders(args, d)
         # Outputs inside the example's folder unless the option under test moves them
         defaults = {"export": ["-p", "e"], "analyse": ["-p", "a"], "prepare": ["-o", "bed.h5"],
-                    "material": ["--out", "m.csv"]}[command]
+                    "material": ["--out", "m.csv"], "hotspots": ["-o", "h"]}[command]
         if defaults[0] not in args:
             args += [defaults[0], os.path.join(d, defaults[1])]
         before = _state(d)

@@ -14,7 +14,8 @@ import sys
 from pdfem import sigterm
 from pdfem.errors import InputError, SimulationError
 
-COMMANDS = ("run", "prepare", "sweep", "analyse", "export", "material", "bench", "study")
+COMMANDS = ("run", "prepare", "sweep", "analyse", "hotspots", "export", "material", "bench",
+            "study")
 
 
 class _Parser(argparse.ArgumentParser):

@@ -28,10 +28,12 @@ Definitions (temperatures in K, SI otherwise):
 import numpy as np
 
 from pdfem.analysis.hotgeom import components, near_segments
+from pdfem.scene.schema import HEAT_FIELDS
 
 NAN = float("nan")
 PERCENTILES = (50.0, 90.0, 99.0, 99.9)
-MECHANISMS = ("plastic", "friction", "thermoelastic", "conducted")
+# The mechanisms of the run's heat_<mechanism> frame fields (pdfem.scene.schema.HEAT_FIELDS)
+MECHANISMS = tuple(f.removeprefix("heat_") for f in HEAT_FIELDS)
 SITES = ("contact", "corner", "surface", "interior")
 
 

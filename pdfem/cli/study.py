@@ -306,6 +306,82 @@ def _width(args):
     return 0
 
 
+def _hotspots_args(p):
+    p.add_argument("scene", nargs="?", default=None, help="shock scene with a [shock] table, "
+                   "run as its thermal variant when it has no [heat] (default: the packaged "
+                   f"{DEFAULT_STUDY_SCENE})")
+    p.add_argument("--levels", default="1,2,3,4", help="grain mesh levels, 6 level^2 quads per "
+                   "grain; multiples of the bed file's level (default 1,2,3,4)")
+    p.add_argument("--rule", default=None, help="element rule of every run, 1pt or 2x2 "
+                   "(default: the scene's)")
+    p.add_argument("--thresholds", default="400,500,600", help="temperatures [K] of the hot "
+                   "area fractions (default 400,500,600)")
+    p.add_argument("--spot-threshold", type=float, default=None, help="temperature [K] above "
+                   "which elements form hot spots (default: the middle threshold)")
+    p.add_argument("-p", "--prefix", default="study-hotspots", help="writes <prefix>.csv, "
+                   "<prefix>.json and the runs in <prefix>-runs/ (default study-hotspots)")
+    p.add_argument("--force", action="store_true", help="overwrite existing output")
+
+
+def _hotspots(args):
+    import json
+
+    from pdfem.cli.run import check_output_path
+    from pdfem.parallel.mpi import world
+    from pdfem.scene import check_ranks, load_scene, parse_scene
+    from pdfem.study import hotspots as hs
+
+    comm = world()
+    levels = _check(_numbers(args.levels, "--levels", int), lambda v: 1 <= v <= 10,
+                    "--levels", "a level in [1, 10]")
+    thresholds = _check(_numbers(args.thresholds, "--thresholds"), lambda v: v > 0.0,
+                        "--thresholds", "a temperature > 0 K")
+    spot = args.spot_threshold
+    if spot is not None and not (math.isfinite(spot) and spot > 0.0):
+        raise InputError(f"--spot-threshold: {spot!r} is not a temperature > 0 K")
+    path = _scene_path(args)
+    scene = load_scene(path)
+    if "shock" not in scene.resolved:
+        raise InputError(f"{path}: shock: the hot-spot study needs a scene with a [shock] "
+                         "table (the front tells the shocked material)")
+    rule = args.rule or scene.resolved["element"]["rule"]
+    if rule not in ("1pt", "2x2"):
+        raise InputError(f"--rule: expected 1pt or 2x2 (got {rule!r})")
+    with open(path, "rb") as fh:
+        doc = hs.thermal_variant(tomllib.load(fh))
+    thermal = parse_scene(doc, scene.base_dir, name=f"{path} (thermal variant)")
+    check_ranks(thermal, comm.size)
+    for ext in (".csv", ".json"):
+        check_output_path(args.prefix + ext, args.force, "--prefix")
+    folder = args.prefix + "-runs"
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise InputError(f"--prefix: {folder} exists and is not a folder")
+    study = hs.HotspotStudy(doc, thermal, folder, comm, rule)
+    study.check_levels(levels)
+    if comm.rank == 0:
+        if os.path.isdir(folder) and args.force:
+            shutil.rmtree(folder)
+        os.makedirs(folder, exist_ok=True)
+        print(f"pdfem study hotspots: {path} (thermal variant) at levels "
+              f"{','.join(map(str, levels))}, rule {rule}, on {comm.size} rank(s)", flush=True)
+    comm.Barrier()
+    rows, chg = study.run_all(levels, thresholds, spot)
+    if comm.rank == 0:
+        from pdfem.analysis.summary import _plain
+
+        print("", *hs.table_lines(rows, chg), sep="\n")
+        with open(args.prefix + ".csv.part", "w") as f:
+            f.write(hs.csv_text(rows))
+        os.replace(args.prefix + ".csv.part", args.prefix + ".csv")
+        with open(args.prefix + ".json.part", "w") as f:
+            json.dump(_plain({"scene": path, "rows": rows, "changes": chg}), f, indent=1)
+        os.replace(args.prefix + ".json.part", args.prefix + ".json")
+        print(f"pdfem study hotspots: {args.prefix}.csv, {args.prefix}.json, runs in "
+              f"{folder}/", flush=True)
+    comm.Barrier()
+    return 0
+
+
 # Study name -> (help, add its arguments, run it)
 STUDIES = {
     "accuracy": ("what accuracy costs in time on a shock scene: mesh level, element rule, "
@@ -319,13 +395,16 @@ STUDIES = {
              _hard_args, _hard),
     "width": ("the shot-912 wave in beds of several widths and seeds: Us and arrival against "
               "width, their spread over seeds", _width_args, _width),
+    "hotspots": ("mesh convergence of hot spots: the thermal variant of a shock scene at "
+                 "several grain mesh levels, the hot-spot census of each", _hotspots_args,
+                 _hotspots),
 }
 
 
 def add_parser(sub):
     p = sub.add_parser("study", help="studies of the solver: accuracy (accuracy against "
                        "cost on a shock scene), convergence (element order), hard (hard "
-                       "cases), width (bed width and seed)")
+                       "cases), width (bed width and seed), hotspots (hot spots against mesh)")
     studies = p.add_subparsers(dest="study", metavar="STUDY", required=True)
     for name, (text, add_args, _) in STUDIES.items():
         add_args(studies.add_parser(name, help=text, description=text))

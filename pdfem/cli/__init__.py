@@ -14,6 +14,10 @@ import sys
 from pdfem import sigterm
 from pdfem.errors import InputError, SimulationError
 
+# Third-party packages pdfem needs at run time (pyproject.toml's dependencies, and matplotlib
+# for the figures): one missing means an environment that is not the project's
+DEPENDENCIES = ("numpy", "numba", "mpi4py", "h5py", "meshio", "matplotlib", "llvmlite")
+
 COMMANDS = ("run", "prepare", "sweep", "analyse", "hotspots", "export", "material", "bench",
             "study")
 
@@ -67,6 +71,14 @@ def main(argv=None):
         if _rank() == 0:
             print(f"pdfem: error: {exc}", file=sys.stderr, flush=True)
         return exc.exit_status
+    except ModuleNotFoundError as exc:
+        if (exc.name or "").split(".")[0] not in DEPENDENCIES:
+            _abort(exc)
+            raise
+        print(f"pdfem: error: the package {exc.name.split('.')[0]} is not installed for "
+              f"{sys.executable}: activate the project's environment (. .venv/bin/activate) "
+              "or install it (bash jobs/install.sh)", file=sys.stderr, flush=True)
+        return 2
     except Exception as exc:
         _abort(exc)
         raise

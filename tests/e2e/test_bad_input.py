@@ -474,3 +474,22 @@ def test_many_coincident_grains_refused_with_the_first_pair(tmp_path):
     _one_error_line(p, "same.toml: grains_file: same.npz row 0 (grain 0): overlaps same.npz "
                     "row 1 (grain 1) at t=0")
     assert _state(tmp_path) == before
+
+
+@pytest.mark.parametrize("args", [["prepare", "--help"], ["export", "run.h5"], []])
+def test_a_missing_dependency_is_one_line_naming_the_fix(tmp_path, args):
+    """A Python without the project's packages (here h5py and numpy made unimportable)
+    gets one line saying to activate or install the environment, exit 2, no traceback."""
+    import sys
+
+    for name in ("h5py", "numpy"):
+        (tmp_path / "block" / name).mkdir(parents=True)
+        (tmp_path / "block" / name / "__init__.py").write_text(
+            f"raise ModuleNotFoundError(\"No module named '{name}'\", name='{name}')\n")
+    env = dict(os.environ, PYTHONPATH=f"{tmp_path / 'block'}:{Path(__file__).parents[2]}")
+    p = subprocess.run([sys.executable, "-m", "pdfem", *args], cwd=tmp_path, env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2, p.stderr
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and "Traceback" not in p.stderr, p.stderr
+    assert "is not installed for" in lines[0] and ". .venv/bin/activate" in lines[0]

@@ -103,7 +103,7 @@ class Gauges:
                          block_elements(blk["nx"], blk["ny"], g["side"]))
                 gid = ng + k
             else:
-                gid, le = _locate(sim, g["point"], f"gauges[{i}]")
+                gid, le = _locate(sim, g["point"], f"{sim.scene.name}: gauges[{i}]")
                 elems = np.array([le], np.int64)
             self.sets.append((gid, elems))
 

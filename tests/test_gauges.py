@@ -42,9 +42,13 @@ def test_point_gauge_reads_the_grain_it_sits_in(tmp_path):
 
 
 def test_point_outside_every_element_is_an_input_error(tmp_path):
-    sim_text = '[[gauges]]\nname = "g"\npoint = [0.0239, 0.0059]\n'
-    with pytest.raises(InputError, match=r"gauges\[0\]\.point: no element contains"):
-        Gauges(_sim(tmp_path, sim_text))
+    """The error names the scene file and the key."""
+    gauge = '[[gauges]]\nname = "g"\npoint = [0.0239, 0.0059]\n'
+    text = drifting_grains(n=4, end=1e-6, out=str(tmp_path / "r.h5"), extra=gauge)
+    sim = Simulation(parse_scene(text, tmp_path, name="gauged.toml"), MPI.COMM_SELF)
+    with pytest.raises(InputError, match=r"^gauged.toml: gauges\[0\]\.point: no element "
+                       "contains"):
+        Gauges(sim)
 
 
 def test_block_gauge_reads_the_contact_force_on_its_nodes(tmp_path):

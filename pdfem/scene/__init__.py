@@ -39,7 +39,8 @@ class Scene:
     start. grains: dict of arrays center (n, 2), axes (n, 2), angle (n,), velocity (n, 2),
     material (n,) int64 ids; grains are ids 0..n-1, [[grains]] first, then grains_file rows.
     materials: material name -> id, in id order. blocks, bcs: the resolved [[blocks]] and
-    [[bc]] lists.
+    [[bc]] lists. name: what error messages call the scene (its file name, or the name it was
+    parsed under).
     """
 
     resolved: dict
@@ -49,6 +50,7 @@ class Scene:
     materials: dict
     blocks: list
     bcs: list
+    name: str = "<scene>"
 
     @property
     def n_grains(self):
@@ -97,7 +99,7 @@ def parse_scene(text_or_dict, base_dir=".", name="<scene>", path=None):
         grains[k] = np.ascontiguousarray(grains[k], dtype=np.float64)
     return Scene(resolved=resolved, path=None if path is None else Path(path), base_dir=base,
                  grains=grains, materials=mat_ids, blocks=resolved["blocks"],
-                 bcs=resolved["bc"])
+                 bcs=resolved["bc"], name=name)
 
 
 def grid_shape(resolved):

@@ -19,9 +19,20 @@ SUMMARY_SUFFIXES = ("-summary.json", "-summary.txt")
 FIGURE_SUFFIXES = ("-snapshots.png", "-gauges.png", "-xt.png", "-hugoniot.png")
 
 
-def output_files(prefix, plots="png"):
-    """Paths of the files :func:`analyse` writes for ``prefix`` ([shock].plots = ``plots``)."""
-    return [prefix + s for s in SUMMARY_SUFFIXES + (FIGURE_SUFFIXES if plots == "png" else ())]
+def output_files(prefix, plots="png", thermal=False):
+    """Paths of the files :func:`analyse` writes for ``prefix`` ([shock].plots = ``plots``);
+    with ``thermal`` (the frames hold temperatures) those of the hot-spot census too."""
+    from pdfem.analysis.hotwrite import output_files as census_files
+
+    out = [prefix + s for s in SUMMARY_SUFFIXES + (FIGURE_SUFFIXES if plots == "png" else ())]
+    if thermal:
+        out += census_files(prefix, "png" if plots == "png" else "none", shock=True)
+    return out
+
+
+def thermal_fields(fields):
+    """Whether frame fields named ``fields`` hold temperatures (the census reads them)."""
+    return any(n in fields for n in ("element_temperature", "temperature"))
 
 
 def _plain(v):
@@ -262,6 +273,17 @@ def report_text(s):
         f"elastic wave speed of the grains sqrt((K+4G/3)/rho) = {_f(s['elastic_wave_speed'])} m/s",
         f"energy balance error: last {_f(s['energy']['balance_error_last'], 100, '.2f')} %, "
         f"max {_f(s['energy']['balance_error_max'], 100, '.2f')} %",
+    ]
+    hs = s.get("hotspots")
+    if hs:
+        t = hs["shocked"]
+        lines.append(f"temperature behind the front at {_f(hs['time'], 1e6, '.2f')} us "
+                     f"(mass-weighted): mean {_f(t['mean'], 1, '.1f')} K, p99 "
+                     f"{_f(t['p99'], 1, '.1f')} K, p99.9 {_f(t['p99.9'], 1, '.1f')} K, max "
+                     f"{_f(t['max'], 1, '.1f')} K; {t['n_spots']} hot spot(s) above "
+                     f"{_f(hs['spot_threshold'], 1, '.0f')} K, at most {hs['most_spots']} "
+                     "(hot-spot census in -hotspots.*)")
+    lines += [
         "",
         "1997 report: a steady wave with up = "
         f"{_f(r['impact_speed'])} m/s into {_f(r['density'])} kg/m3 of {_f(r['solid_density'])}"
@@ -315,9 +337,38 @@ def analyse(run_path, prefix, extra=None):
     run = read_run(str(run_path))
     summary, arrays = compute(run)
     summary["run"] = dict(extra or {})
+    plots = run.shock.get("plots", "png")
+    if _holds_temperatures(run_path):
+        summary["hotspots"] = _census(run_path, prefix, plots)
     plain = _plain(summary)
     _write(prefix + "-summary.json", json.dumps(plain, indent=1) + "\n")
     _write(prefix + "-summary.txt", report_text(plain))
-    if run.shock.get("plots", "png") == "png":
+    if plots == "png":
         _figures(run, summary, arrays, prefix)
     return {**summary, "arrays": arrays}
+
+
+def _holds_temperatures(path):
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return thermal_fields(f["frames"])
+
+
+def _census(path, prefix, plots):
+    """The hot-spot census of a thermal shock run, its files written next to the summary;
+    the summary's part: the last frame behind the front and the most spots of any frame."""
+    from pdfem.analysis.hotcensus import census
+    from pdfem.analysis.hotwrite import write_outputs
+
+    result, maps = census(str(path))
+    write_outputs(result, maps, prefix, "png" if plots == "png" else "none")
+    last = result["frames"][-1]
+    region = last.get("shocked", last["whole"])
+    most = max(result["frames"], key=lambda fr: fr["whole"]["n_spots"])
+    keys = ("mean", "p50", "p90", "p99", "p99.9", "max", "n_spots")
+    return {"time": last["time"], "spot_threshold": result["settings"]["spot_threshold"],
+            "shocked": {k: region[k] for k in keys},
+            "area_fraction": region["area_fraction"],
+            "most_spots": most["whole"]["n_spots"], "most_spots_time": most["time"],
+            "heat_fields": result["heat_fields"]}

@@ -21,17 +21,21 @@ def prefix_of(path):
 
 
 def _plots(path):
-    """[shock].plots of a run file's scene, or None when the file does not tell (then
-    :func:`pdfem.analysis.analyse` reports what is wrong with it)."""
+    """([shock].plots of a run file's scene, whether its frames hold temperatures), or
+    (None, False) when the file does not tell (then :func:`pdfem.analysis.analyse` reports
+    what is wrong with it)."""
     import tomllib
 
     import h5py
 
+    from pdfem.analysis.summary import thermal_fields
+
     try:
         with h5py.File(path, "r") as f:
-            return tomllib.loads(str(f.attrs["scene"]))["shock"].get("plots", "png")
+            plots = tomllib.loads(str(f.attrs["scene"]))["shock"].get("plots", "png")
+            return plots, thermal_fields(f["frames"]) if "frames" in f else False
     except (OSError, KeyError, TypeError, AttributeError, tomllib.TOMLDecodeError):
-        return None
+        return None, False
 
 
 def run(args):
@@ -45,9 +49,9 @@ def run(args):
     if not os.path.isfile(args.runfile):
         raise InputError(f"{args.runfile}: no such run file")
     prefix = prefix_of(args.runfile) if args.prefix is None else args.prefix
-    plots = _plots(args.runfile)
+    plots, thermal = _plots(args.runfile)
     if plots is not None:
-        for path in output_files(prefix, plots):
+        for path in output_files(prefix, plots, thermal):
             check_output_path(path, args.force, "--prefix")
     summary = analyse(args.runfile, prefix)
     print(report_text(summary))

@@ -76,7 +76,7 @@ def run_outputs(out, scene, plots=None, restart=None):
     """Every file a run of ``scene`` into ``out`` may leave: the run file, its XDMF sidecar,
     its checkpoint (unless it is the ``restart`` being continued) and, for a shock scene, the
     analysis (summary, and figures unless ``plots`` or the scene's shock.plots is "none")."""
-    from pdfem.analysis.summary import output_files
+    from pdfem.analysis.summary import output_files, thermal_fields
     from pdfem.cli.analyse import prefix_of
 
     files = [out, os.path.splitext(out)[0] + ".xdmf"]
@@ -86,7 +86,8 @@ def run_outputs(out, scene, plots=None, restart=None):
     if restart is None or os.path.abspath(restart) != os.path.abspath(ckpt):
         files.append(ckpt)
     if "shock" in scene.resolved:
-        files += output_files(prefix_of(out), plots or scene.resolved["shock"]["plots"])
+        files += output_files(prefix_of(out), plots or scene.resolved["shock"]["plots"],
+                              thermal_fields(scene.resolved["output"]["fields"]))
     return files
 
 

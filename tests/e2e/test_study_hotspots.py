@@ -95,3 +95,28 @@ def test_bad_hotspot_study_input(tmp_path, case):
     assert p.returncode == 2, p.stderr
     assert msg in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
     assert not (tmp_path / "study-hotspots-runs").exists()
+
+
+def test_a_thermal_shock_run_writes_its_census_with_the_summary(tmp_path):
+    """pdfem run of a thermal shock scene: the analysis adds the hot-spot census files and
+    the summary's hotspots part; analyse refuses to overwrite them without --force."""
+    doc = thermal_variant(packaged("shot912_small.toml"))
+    doc["time"]["end"] = 3.0e-7
+    doc["output"].update(path="hot.h5", interval=1.0e-7)
+    doc["shock"]["plots"] = "none"
+    write_scene(tmp_path / "hot.toml", doc)
+    p = pdfem(["run", "hot.toml"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert "temperature behind the front at" in p.stdout
+    summary = json.loads((tmp_path / "hot-summary.json").read_text())
+    hs = summary["hotspots"]
+    census = json.loads((tmp_path / "hot-hotspots.json").read_text())
+    last = census["frames"][-1]["shocked"]
+    assert hs["shocked"]["max"] == last["max"] and hs["shocked"]["p99"] == last["p99"]
+    assert hs["heat_fields"] == list(HEAT_FIELDS)
+    for suffix in ("-hotspots.csv", "-hotspots-spots.csv", "-hotspots-front.csv"):
+        assert (tmp_path / f"hot{suffix}").is_file()
+    again = pdfem(["analyse", "hot.h5", "-p", "hot"], tmp_path)
+    assert again.returncode == 2 and "hot-summary.json exists" in again.stderr
+    again = pdfem(["analyse", "hot.h5", "-p", "hot", "--force"], tmp_path)
+    assert again.returncode == 0, again.stderr

@@ -6,7 +6,9 @@ many as /frames/time), per node (NN, as /mesh/node_body) or per element (NE, as 
 Mesh ids must be in range (node ids in [0, NN), body ids in [0, NB), material ids >= 0 and
 below the scene's count when known), and frame and gauge times finite and non-decreasing. The
 first problem found raises :class:`~pdfem.errors.InputError` naming the file and the dataset.
-The frame fields' values are not read (a run file may be larger than memory).
+The frame fields' values are not read (a run file may be larger than memory). Before the
+command opens the file, :func:`pdfem.io.probe.check_metadata` has walked its metadata in a
+child process (damaged metadata can hang or crash the HDF5 library).
 """
 
 import h5py

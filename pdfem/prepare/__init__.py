@@ -13,9 +13,9 @@ def _log(line):
 
 def prepare(path, out, comm, log=_log, allow_huge=False):
     """Prepare the bed of the preparation scene at ``path`` (its ``prepare.method``) and write
-    it to ``out``; returns the bed file's attributes on rank 0 (None elsewhere). A bed or a
-    rain phase beyond the limits of :mod:`pdfem.prepare.size` is refused unless
-    ``allow_huge``."""
+    it to ``out``; returns the bed file's attributes on rank 0 (None elsewhere). A bed beyond
+    the limits of :mod:`pdfem.prepare.size`, or a rain phase of more than MAX_STEPS steps
+    (:mod:`pdfem.limits`), is refused unless ``allow_huge``."""
     from pdfem.prepare.size import check_size
     from pdfem.scene import load_scene
 

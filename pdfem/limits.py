@@ -55,14 +55,21 @@ def check_runs(runs, comm, allow_huge=False, key="time.end", remedy=None):
     on ``comm`` in turn (its first stable step is the estimate's), checked and dropped, so
     the plan costs one more set-up per run and never more than one run's memory. Raises the
     InputError of :func:`check_step_count` (``name`` naming the file and the run; ``key``
-    and ``remedy`` as there) for the first run over MAX_STEPS; nothing is written.
+    and ``remedy`` as there) for the first run over MAX_STEPS; nothing is written. A run
+    whose set-up already stops on a guard (SimulationError, on every rank together) is
+    passed over: it stops the same way when its turn comes, and the command deals with it
+    as it does then.
     """
     if allow_huge:
         return
+    from pdfem.errors import SimulationError
     from pdfem.solver import Simulation
 
     for scene, name in runs:
-        sim = Simulation(scene, comm)
+        try:
+            sim = Simulation(scene, comm)
+        except SimulationError:
+            continue
         try:
             check_step_count(sim, name, key=key, remedy=remedy)
         finally:

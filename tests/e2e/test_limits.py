@@ -178,3 +178,23 @@ def test_check_runs_builds_nothing_with_allow_huge():
     with pytest.raises(InputError, match="long: time.end: about"):
         check_runs([(scene, "long")], world())
     check_runs([(scene, "long")], world(), allow_huge=True)
+
+
+def test_check_runs_passes_over_a_run_whose_set_up_stops_on_a_guard():
+    """time.dt_min above the stable step stops the set-up (SimulationError): the check leaves
+    that run to the command, which stops it on its turn as before; the next run is checked."""
+    from pdfem.errors import InputError, SimulationError
+    from pdfem.limits import check_runs
+    from pdfem.parallel.mpi import world
+    from pdfem.scene import parse_scene
+    from pdfem.solver import Simulation
+
+    doc = packaged("shot912_small.toml")
+    doc["time"].update(dt_min=1.0e-6, dt_max=1.0e-5)
+    stops = parse_scene(doc, name="stops")
+    with pytest.raises(SimulationError, match="below time.dt_min"):
+        Simulation(stops, world())
+    doc = packaged("shot912_small.toml")
+    doc["time"]["end"] = 1.0e3
+    with pytest.raises(InputError, match="long: time.end: about"):
+        check_runs([(stops, "stops"), (parse_scene(doc, name="long"), "long")], world())

@@ -43,11 +43,14 @@ def run(args):
     from pdfem.analysis.summary import output_files, report_text
     from pdfem.cli.run import check_output_path
     from pdfem.errors import InputError
+    from pdfem.io.probe import check_metadata
 
     if not args.runfile:
         raise InputError("runfile: empty file name")
     if not os.path.isfile(args.runfile):
         raise InputError(f"{args.runfile}: no such run file")
+    # Damaged metadata can hang the HDF5 library: read it in a child process first
+    check_metadata(args.runfile)
     prefix = prefix_of(args.runfile) if args.prefix is None else args.prefix
     plots, thermal = _plots(args.runfile)
     if plots is not None:

@@ -165,6 +165,7 @@ def _write_frames(f, fmt, ks, paths):
 def run(args):
     import h5py
 
+    from pdfem.io.probe import check_metadata
     from pdfem.io.runcheck import check_run_file
 
     if not args.runfile:
@@ -173,6 +174,8 @@ def run(args):
         raise InputError(f"{args.runfile}: no such run file")
     prefix = os.path.splitext(args.runfile)[0] if args.prefix is None else args.prefix
     fmt = _format(args.format.lower())
+    # Damaged metadata can hang the HDF5 library: read it in a child process first
+    check_metadata(args.runfile)
     try:
         f = h5py.File(args.runfile, "r")
     except OSError as exc:

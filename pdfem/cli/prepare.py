@@ -3,6 +3,7 @@
 import os
 
 from pdfem.cli.run import check_output_path
+from pdfem.limits import add_allow_huge
 
 
 def add_parser(sub):
@@ -11,6 +12,8 @@ def add_parser(sub):
     p.add_argument("scene", help="preparation scene (TOML with a [prepare] table)")
     p.add_argument("-o", "--output", default=None, help="bed file (overrides prepare.output)")
     p.add_argument("--force", action="store_true", help="overwrite an existing bed file")
+    add_allow_huge(p, "a bed of more grains or sweeps than pdfem.prepare.size allows, a "
+                   "rain phase of more than 1e9 steps")
 
 
 def run(args):
@@ -24,11 +27,16 @@ def run(args):
     out = scene.resolved["prepare"]["output"] if args.output is None else args.output
     check_output_path(out, args.force, "prepare.output")
     out = os.path.abspath(out)
+    # The size before MPI starts: an absurd bed is refused with its estimate
+    from pdfem.prepare.size import check_size, describe
+
+    grains = check_size(scene.resolved, args.scene, args.allow_huge)
     from pdfem.parallel.mpi import world
     from pdfem.prepare import prepare
 
     comm = world()
     if comm.rank == 0:
-        print(f"pdfem: preparing {args.scene} on {comm.size} rank(s) -> {out}", flush=True)
-    prepare(args.scene, out, comm)
+        print(f"pdfem: preparing {args.scene} ({describe(grains)}) on {comm.size} rank(s) -> "
+              f"{out}", flush=True)
+    prepare(args.scene, out, comm, allow_huge=args.allow_huge)
     return 0

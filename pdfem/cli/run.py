@@ -1,11 +1,11 @@
 """``pdfem run [scene] [-o out.h5]``: run a scene (the default scene when none is given)."""
 
-import math
 import os
 import sys
 from importlib import resources
 
 from pdfem.errors import InputError
+from pdfem.limits import MAX_STEPS, add_allow_huge, check_step_count
 
 DEFAULT_SCENE = "shot912.toml"
 # Suffix of an output file while it is written (renamed when complete)
@@ -15,9 +15,6 @@ PART = ".part"
 # it to tell a clean stop from a failure when mpirun's own exit status cannot (it exits 1
 # after it was itself signalled, although every rank exited 0)
 STATUS_ENV = "PDFEM_STATUS_FILE"
-# Steps beyond which a run is refused unless --allow-huge (a typo in time.end or a tiny
-# stable step: days of wall time even for a few grains)
-MAX_STEPS = 10**9
 
 
 def default_scene_path():
@@ -34,8 +31,7 @@ def add_parser(sub):
     p.add_argument("--quiet", action="store_true", help="no progress or report")
     p.add_argument("--restart", default=None, metavar="CHECKPOINT", help="continue from a "
                    "checkpoint (<run file>.ckpt.h5) of this scene, on any number of ranks")
-    p.add_argument("--allow-huge", action="store_true", help=f"run even when the estimated "
-                   f"number of steps exceeds {MAX_STEPS:.0e}")
+    add_allow_huge(p, f"more than {MAX_STEPS:.0e} steps")
 
 
 def check_output_path(path, force, key="output.path"):
@@ -58,18 +54,6 @@ def check_output_path(path, force, key="output.path"):
         raise InputError(f"{key}: {path}: file name longer than {longest} bytes")
     if os.path.lexists(path) and not force:
         raise InputError(f"{key}: {path} exists (use --force to overwrite)")
-
-
-def check_step_count(sim, name, allow_huge=False):
-    """Refuse (InputError naming time.end) a run whose estimated step count, the time left
-    over the first stable step (or time.max_steps when smaller), exceeds MAX_STEPS, unless
-    ``allow_huge``. The step is the global one, so every rank decides alike."""
-    left = (sim.t_end - sim.t) / sim.dt if sim.dt > 0 else math.inf
-    steps = min(left, sim.max_steps - sim.nstep) if sim.max_steps else left
-    if steps > MAX_STEPS and not allow_huge:
-        raise InputError(f"{name}: time.end: about {steps:.3g} steps of {sim.dt:.3g} s to reach "
-                         f"{sim.t_end:g} s, more than {MAX_STEPS:.0e}: shorten time.end, set "
-                         "time.max_steps, or pass --allow-huge if you mean it")
 
 
 def run_outputs(out, scene, plots=None, restart=None):

@@ -17,6 +17,7 @@ import shutil
 import tomllib
 
 from pdfem.errors import InputError
+from pdfem.limits import MAX_STEPS, add_allow_huge
 
 DEFAULT_STUDY_SCENE = "shot912_small.toml"
 # Meshes of the convergence order printed after the accuracy study
@@ -86,6 +87,7 @@ def _accuracy_args(p):
     p.add_argument("--force", action="store_true", help="overwrite existing output")
     p.add_argument("--no-convergence", action="store_true", help="skip the element "
                    "convergence order printed at the end")
+    add_allow_huge(p, f"a run of more than {MAX_STEPS:.0e} steps")
 
 
 def _convergence_args(p):
@@ -151,6 +153,10 @@ def _accuracy(args):
     study.check_levels(levels)
     if base_given and base_given[0] not in levels:
         raise InputError(f"--baseline: level {base_given[0]} is not in --levels")
+    # Every run the study may start, its step count before the first one
+    study.check_steps(acc.possible_settings(levels, rules, safeties, scales,
+                                            scene.resolved["time"]["safety"], base_given),
+                      args.allow_huge)
     # The runs folder, emptied of an earlier study's files with --force
     if comm.rank == 0:
         if os.path.isdir(folder) and args.force:
@@ -266,6 +272,8 @@ def _width_args(p):
     p.add_argument("-p", "--prefix", default="study-width", help="the table to "
                    "<prefix>.json, beds and runs in <prefix>-runs/ (default study-width)")
     p.add_argument("--force", action="store_true", help="overwrite existing output")
+    add_allow_huge(p, "a bed beyond the preparation's limits, a run of more than "
+                   f"{MAX_STEPS:.0e} steps")
 
 
 def _width(args):
@@ -285,6 +293,8 @@ def _width(args):
     folder = args.prefix + "-runs"
     if os.path.exists(folder) and not os.path.isdir(folder):
         raise InputError(f"--prefix: {folder} exists and is not a folder")
+    # Every bed's size before the first one is prepared
+    ws.check_sizes(ws.plan(widths, args.seeds, args.seed_width), folder, args.allow_huge)
     comm = world()
     if comm.rank == 0:
         if os.path.isdir(folder) and args.force:
@@ -292,7 +302,7 @@ def _width(args):
         os.makedirs(folder, exist_ok=True)
     comm.Barrier()
     rows = ws.run_study(widths, args.seeds, args.seed_width, folder, comm,
-                        lambda s: print(s, flush=True))
+                        lambda s: print(s, flush=True), args.allow_huge)
     if comm.rank == 0:
         from pdfem.analysis.summary import _plain
 

@@ -19,6 +19,7 @@ import tomllib
 from itertools import pairwise
 
 from pdfem.errors import InputError, SimulationError
+from pdfem.limits import MAX_STEPS, add_allow_huge
 
 DEFAULT_SPEEDS = "100,200,288,400,500,700,1000"
 
@@ -37,6 +38,7 @@ def add_parser(sub):
     p.add_argument("-p", "--prefix", default="sweep", help="prefix of the run files, "
                    "<prefix>.json and <prefix>.png (default: sweep)")
     p.add_argument("--force", action="store_true", help="overwrite existing run files")
+    add_allow_huge(p, f"a run of more than {MAX_STEPS:.0e} steps")
 
 
 def _speeds(text):
@@ -122,14 +124,24 @@ def run(args):
     docs = [parse_scene(hg.shock_doc(doc, sh["hammer"], v, H0, us), scene.base_dir,
                         name=f"{path} (piston at {v:g} m/s)")
             for v, us in zip(speeds, slowest, strict=True)]
+    static = _static_scene(scene, doc, sh, H0, phi0) if args.static else None
     from pdfem.analysis import analyse
     from pdfem.analysis.plots import sweep_plot
     from pdfem.driver import run as drive
+    from pdfem.limits import check_runs
     from pdfem.parallel.mpi import world
     from pdfem.solver import Simulation
 
     comm = world()
     check_ranks(scene, comm.size)
+    # Every run's step count before the first one starts
+    plan = [(sc, f"{path} (piston at {v:g} m/s)") for v, sc in zip(speeds, docs, strict=True)]
+    check_runs(plan, comm, args.allow_huge, key="--velocities",
+               remedy="faster pistons (a run lasts the snowplow transit time) or a scene "
+               "with a longer stable step")
+    if static is not None:
+        check_runs([(static[0], f"{path} (static compression)")], comm, args.allow_huge,
+                   key="--static", remedy="a scene with a longer stable step, no --static")
     points, stops = [], 0
     bed = {"rho0": phi0 * rho_s, "solid_density": rho_s}
     for v, sc, out in zip(speeds, docs, outs, strict=True):
@@ -155,7 +167,7 @@ def run(args):
                   + f", precursor {_f(p['precursor'])} m/s, up {_f(p['up'])} m/s, rho1 "
                   f"{_f(p['rho1'])} kg/m3, stress {_f(p['sigma'], 1e-6)} MPa; snowplow Us "
                   f"{_f(p['snowplow_us'])} m/s", flush=True)
-    static = _static(args, scene, doc, sh, H0, phi0, width, comm) if args.static else None
+    static = _static(args, static, sh, H0, phi0, width, comm) if args.static else None
     if comm.rank == 0:
         from pdfem.analysis.summary import _plain
 
@@ -176,15 +188,23 @@ def run(args):
     return 3 if stops else 0
 
 
-def _static(args, scene, doc, sh, H0, phi0, width, comm):
-    """The static compression run and its curve (rank 0)."""
-    from pdfem.driver import run as drive
+def _static_scene(scene, doc, sh, H0, phi0):
+    """The checked scene of the static compression run and its snowplow stress floor."""
     from pdfem.scene import parse_scene
-    from pdfem.solver import Simulation
     from pdfem.study import hugoniot as hg
 
     d, floor = hg.static_doc(doc, sh["hammer"], H0, phi0)
-    sc = parse_scene(d, scene.base_dir, name=f"{scene.path} (static compression)")
+    return parse_scene(d, scene.base_dir, name=f"{scene.path} (static compression)"), floor
+
+
+def _static(args, static, sh, H0, phi0, width, comm):
+    """The static compression run of ``static`` (its scene and stress floor) and its curve
+    (rank 0)."""
+    from pdfem.driver import run as drive
+    from pdfem.solver import Simulation
+    from pdfem.study import hugoniot as hg
+
+    sc, floor = static
     out = args.prefix + "-static.h5"
     if comm.rank == 0:
         print(f"pdfem sweep: static compression (densities x {hg.STATIC_SCALE:g}, piston at "

@@ -4,9 +4,12 @@ Every dataset of the layout (:mod:`pdfem.io.h5out`) that the caller uses must be
 strings, bytes, records or objects) and of its layout's shape: one row per frame (F rows, as
 many as /frames/time), per node (NN, as /mesh/node_body) or per element (NE, as /mesh/conn).
 Mesh ids must be in range (node ids in [0, NN), body ids in [0, NB), material ids >= 0 and
-below the scene's count when known), and frame and gauge times finite and non-decreasing. The
+below the scene's count when known), and frame and gauge times finite and increasing (a run
+writes at most one frame and one gauge sample a step, and every step moves the time on). The
 first problem found raises :class:`~pdfem.errors.InputError` naming the file and the dataset.
-The frame fields' values are not read (a run file may be larger than memory).
+The frame fields' values are not read (a run file may be larger than memory). Before the
+command opens the file, :func:`pdfem.io.probe.check_metadata` has walked its metadata in a
+child process (damaged metadata can hang or crash the HDF5 library).
 """
 
 import h5py
@@ -59,21 +62,33 @@ def _dataset(f, name, path):
     return obj
 
 
+def _dtype(d, name, path):
+    """The numpy dtype of dataset d; InputError when h5py cannot map its HDF5 datatype (a
+    damaged datatype message: a float of no numpy precision, say)."""
+    try:
+        return d.dtype
+    except (ValueError, TypeError) as exc:
+        msg = " ".join(str(exc).split())
+        raise InputError(f"{path}: /{name}: unreadable datatype ({msg})") from None
+
+
 def _numeric(d, name, path, ids=False):
     """InputError unless dataset d holds numbers (integers when ``ids``)."""
-    kind = d.dtype.kind
+    dtype = _dtype(d, name, path)
+    kind = dtype.kind
     want = "iu" if ids else "iuf"
     if kind not in want:
-        held = KIND_NAMES.get(kind, f"dtype {d.dtype}")
+        held = KIND_NAMES.get(kind, f"dtype {dtype}")
         what = "integer ids" if ids else "numbers"
         raise InputError(f"{path}: /{name}: holds {held}, not {what}")
 
 
 def _floats(d, name, path):
     """InputError unless dataset d holds floats (what the run writes for a frame field)."""
-    if d.dtype.kind != "f":
-        held = KIND_NAMES.get(d.dtype.kind, f"integers ({d.dtype})" if d.dtype.kind in "iu"
-                              else f"dtype {d.dtype}")
+    dtype = _dtype(d, name, path)
+    if dtype.kind != "f":
+        held = KIND_NAMES.get(dtype.kind, f"integers ({dtype})" if dtype.kind in "iu"
+                              else f"dtype {dtype}")
         raise InputError(f"{path}: /{name}: holds {held}, not floats")
 
 
@@ -107,16 +122,17 @@ def _in_range(d, name, path, n, what):
 
 
 def _times(d, name, path):
-    """InputError unless the times of dataset d are finite and non-decreasing."""
+    """InputError unless the times of dataset d are finite and increasing."""
     t = _read(d, name, path).astype(float)
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
         raise InputError(f"{path}: /{name}: not finite at row {int(bad[0])} "
                          f"(got {float(t[bad[0]])!r})")
-    back = np.flatnonzero(np.diff(t) < 0.0)
+    back = np.flatnonzero(np.diff(t) <= 0.0)
     if back.size:
         k = int(back[0]) + 1
-        raise InputError(f"{path}: /{name}: decreases at row {k} "
+        how = "decreases" if t[k] < t[k - 1] else "repeats"
+        raise InputError(f"{path}: /{name}: {how} at row {k} "
                          f"({float(t[k])!r} after {float(t[k - 1])!r})")
 
 

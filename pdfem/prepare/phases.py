@@ -36,6 +36,7 @@ import numpy as np
 
 from pdfem.energy import global_terms
 from pdfem.errors import InputError
+from pdfem.limits import check_step_count
 from pdfem.prepare import packing
 from pdfem.prepare.bedfile import write_bed
 from pdfem.prepare.rain import rain_grains
@@ -46,8 +47,10 @@ from pdfem.solver import Simulation
 # Steps between kinetic-energy checks, and the fewest steps of a phase
 CHECK = 100
 MIN_STEPS = 1000
-# The most steps of the settle phase (it only confirms the equilibrium)
+# The most steps of the settle phase (it only confirms the equilibrium), and the step limit
+# of the other phases (none: prepare.phase_time ends them)
 SETTLE_STEPS = 50000
+NO_LIMIT = 2**62
 # Tables of the preparation scene that the phases drop (analysis, heat, output)
 DROPPED = ("prepare", "shock", "gauges", "output", "grains_file", "heat", "thermal_bc")
 
@@ -136,10 +139,14 @@ def _gather_grains(sim):
     return (gids[order],) + tuple(np.array([c[k] for k in order]) for c in cols)
 
 
-def _run_phase(name, scene, comm, threshold, log, max_steps):
-    """Step one phase until the kinetic energy is below threshold; return (sim, figures)."""
+def _run_phase(name, scene, comm, threshold, log, max_steps, where, allow_huge=False):
+    """Step one phase until the kinetic energy is below threshold; return (sim, figures).
+    A phase without a step limit of its own is refused beyond MAX_STEPS (pdfem.limits, the
+    error naming ``where``) unless ``allow_huge``."""
     t0 = time.perf_counter()
     sim = Simulation(scene, comm)
+    if max_steps >= NO_LIMIT:
+        check_step_count(sim, where, allow_huge, key="prepare.phase_time")
     ke = math.inf
     while sim.t < sim.t_end and sim.nstep < max_steps:
         sim.step()
@@ -155,14 +162,17 @@ def _run_phase(name, scene, comm, threshold, log, max_steps):
         log(f"prepare: {name}: {sim.nstep} steps, t = {sim.t:.4e} s, energy "
             f"{ke:.3e} J/m (threshold {threshold:.3e}) in {fig['wall_s']:.1f} s"
             + ("" if done else "  NOT AT REST at the phase limit (prepare.phase_time"
-                                 + (f" or {max_steps} steps)" if max_steps < 2**62 else ")")))
+                                 + (f" or {max_steps} steps)" if max_steps < NO_LIMIT else ")")))
     return sim, fig
 
 
-def prepare_rain(path, scene, out, comm, log):
+def prepare_rain(path, scene, out, comm, log, allow_huge=False):
     """Run the four phases of the preparation scene at ``path``; write the bed to ``out``;
     return its attributes on rank 0. With ``prepare.packing`` the packing reached must be
-    within the tolerances of it, else InputError (and no bed file)."""
+    within the tolerances of it, else InputError (and no bed file). A phase of more than
+    MAX_STEPS estimated steps (pdfem.limits) is refused unless ``allow_huge``: the rain phase
+    before any step; the others, whose stable step is about the rain phase's, at their
+    start."""
     r = scene.resolved
     pr = r["prepare"]
     base = _base_doc(path, scene)
@@ -190,10 +200,12 @@ def prepare_rain(path, scene, out, comm, log):
                                      f"(needs y up to {weight_box[3]:g} m, domain top "
                                      f"{box[3]:g} m)")
             doc = _phase_doc(base, pr, phase, grains, bed, weight_box)
-            sc = parse_scene(doc, scene.base_dir, name=f"{path} ({phase} phase)")
-            check_ranks(sc, comm.size, f"{path} ({phase} phase)")
-            limit = SETTLE_STEPS if phase == "settle" else 2**62
-            sim, figs[phase] = _run_phase(phase, sc, comm, threshold, log, limit)
+            where = f"{path} ({phase} phase)"
+            sc = parse_scene(doc, scene.base_dir, name=where)
+            check_ranks(sc, comm.size, where)
+            limit = SETTLE_STEPS if phase == "settle" else NO_LIMIT
+            sim, figs[phase] = _run_phase(phase, sc, comm, threshold, log, limit, where,
+                                          allow_huge)
             state = _gather_grains(sim)
             bed, grains = (tmp[k] if k < len(tmp) else out), None
             err = None

@@ -88,6 +88,18 @@ def axis_settings(base, safeties, kn0_scales):
     return out
 
 
+def possible_settings(levels, rules, safeties, kn0_scales, safety, base=None):
+    """Every setting a study may run: the reference, the grid at ``safety`` (the scene's)
+    and the axes around the baseline ``base`` (level, rule) or, when it is chosen from the
+    grid's results, around every grid setting."""
+    grid = grid_settings(levels, rules, safety)
+    bases = [Setting(base[0], base[1], safety, 1.0)] if base else grid
+    out = [reference_setting(levels, rules, list(safeties) + [safety])] + grid
+    for b in bases:
+        out += axis_settings(b, safeties, kn0_scales)
+    return unique(out)
+
+
 def unique(settings):
     """The settings without repeats (the first of each key kept, in order)."""
     seen, out = set(), []
@@ -163,10 +175,12 @@ class AccuracyStudy:
         self.comm.Barrier()
         return path
 
-    def scene_of(self, setting, name):
+    def scene_of(self, setting, name, written=True):
         """The checked scene of a setting: the scene dict with its element, time step,
         contact stiffness and bed replaced; no figures, no checkpoints; a driven hammer that
-        is released ends the run there (the study measures the wave, not the spring-back)."""
+        is released ends the run there (the study measures the wave, not the spring-back).
+        ``written=False``: the bed re-meshed in memory, as :meth:`bed_for` would write it
+        (the same grains, positions and stresses; nothing written)."""
         from pdfem.scene import parse_scene
 
         doc = copy.deepcopy(self.doc)
@@ -178,10 +192,24 @@ class AccuracyStudy:
         doc.setdefault("time", {})["safety"] = setting.safety
         scale_contact(doc, setting.kn0_scale)
         if self.bed:
-            doc["grains_file"]["path"] = os.path.abspath(self.bed_for(setting))
+            bed = self.bed_for(setting) if written else self.bed
+            doc["grains_file"]["path"] = os.path.abspath(bed)
         doc.setdefault("shock", {})["plots"] = "none"
         doc.setdefault("output", {}).update(checkpoint_interval=0.0, checkpoint_wall=0.0)
-        return parse_scene(doc, self.scene.base_dir, name=name)
+        scene = parse_scene(doc, self.scene.base_dir, name=name)
+        if not written:
+            _stresses_to_rule(scene.grains, setting)
+        return scene
+
+    def check_steps(self, plan, allow_huge=False):
+        """Refuse (pdfem.limits.check_runs) a study any of whose settings in ``plan`` would
+        run more than MAX_STEPS steps, before the first run; nothing is written."""
+        from pdfem.limits import check_runs
+
+        names = ((s, f"{self.scene.path} ({s.label})") for s in plan)
+        check_runs(((self.scene_of(s, name, written=False), name) for s, name in names),
+                   self.comm, allow_huge, remedy="shorten time.end, leave the setting out "
+                   "(--levels, --safety, --kn0-scale)")
 
     def run(self, setting):
         """Run one setting (once: a setting already run returns its row); return the row."""
@@ -257,6 +285,18 @@ class AccuracyStudy:
                          for k, h, _, u, s in QUANTITIES)
         self.log(f"[{count}] {setting.label}: {row['wall_s']:.1f} s, {row['steps']} steps; "
                  + (vals if row["status"] == "ok" else row["status"]), flush=True)
+
+
+def _stresses_to_rule(grains, setting):
+    """A bed's stresses and state (when stored) at the setting's element rule, as
+    relevel_bed writes them: the scene re-meshes a bed to another level at its rule, but at
+    the bed's own level it keeps the bed's integration points."""
+    from pdfem.prepare.relevel import RULE_POINTS, refine_points
+
+    nip = RULE_POINTS[setting.rule]
+    if "elem_sig" in grains and grains["elem_sig"].shape[2] != nip:
+        for k in ("elem_sig", "elem_mst"):
+            grains[k] = refine_points(grains[k], setting.level, setting.level, nip)
 
 
 def baseline(rows, tol):

@@ -142,22 +142,41 @@ def conclusions(rows, tol=0.05):
     return lines
 
 
-def run_study(widths, seeds, seed_width, folder, comm, log):
+def plan(widths, seeds, seed_width):
+    """The (width in grains, seed) of every bed of the study: each width at the packaged
+    seed, then ``seeds`` - 1 more seeds at ``seed_width``."""
+    base_seed = _packaged(PREP)[0]["prepare"]["seed"]
+    return [(w, base_seed) for w in widths] + [(seed_width, base_seed + k)
+                                               for k in range(1, seeds)]
+
+
+def check_sizes(beds, folder, allow_huge=False):
+    """Refuse (pdfem.prepare.size.check_size) a study any of whose beds is beyond the
+    preparation's limits, before the first one is prepared; nothing is written."""
+    from pdfem.prepare.size import check_size
+    from pdfem.scene import parse_scene
+
+    for wide, seed in beds:
+        _, _, base, prep, tag = scenes(wide * NOMINAL, seed, folder)
+        name = f"{PREP} ({tag})"
+        check_size(parse_scene(prep, base, name=name).resolved, name, allow_huge)
+
+
+def run_study(widths, seeds, seed_width, folder, comm, log, allow_huge=False):
     """Prepare and run every bed (widths in grains; ``seeds`` seeds at ``seed_width``, the
-    packaged seed first); return the rows (rank 0; None elsewhere)."""
+    packaged seed first); return the rows (rank 0; None elsewhere). A bed or run beyond the
+    limits (pdfem.limits) is refused unless ``allow_huge``."""
     import time
 
     from pdfem.analysis import analyse
     from pdfem.driver import run as drive
+    from pdfem.limits import check_step_count
     from pdfem.prepare import prepare
     from pdfem.scene import check_ranks, parse_scene
     from pdfem.solver import Simulation
 
-    base_seed = _packaged(PREP)[0]["prepare"]["seed"]
-    plan = [(w, base_seed) for w in widths]
-    plan += [(seed_width, base_seed + k) for k in range(1, seeds)]
     rows = []
-    for wide, seed in plan:
+    for wide, seed in plan(widths, seeds, seed_width):
         width = wide * NOMINAL
         prep_path, shot, base, prep, tag = scenes(width, seed, folder)
         if comm.rank == 0:
@@ -165,11 +184,14 @@ def run_study(widths, seeds, seed_width, folder, comm, log):
                 f.write(dumps(prep))
             log(f"pdfem study width: {wide:g} grains wide ({width * 1e3:g} mm), seed {seed}")
         comm.Barrier()
-        prepare(prep_path, shot["grains_file"]["path"], comm, log=lambda s: None)
+        prepare(prep_path, shot["grains_file"]["path"], comm, log=lambda s: None,
+                allow_huge=allow_huge)
         sc = parse_scene(shot, base, name=f"{SCENE} ({tag})")
         check_ranks(sc, comm.size)
         t0 = time.perf_counter()
-        drive(Simulation(sc, comm), shot["output"]["path"], quiet=True)
+        sim = Simulation(sc, comm)
+        check_step_count(sim, f"{SCENE} ({tag})", allow_huge)
+        drive(sim, shot["output"]["path"], quiet=True)
         wall = time.perf_counter() - t0
         if comm.rank == 0:
             out = shot["output"]["path"]

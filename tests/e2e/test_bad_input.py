@@ -118,6 +118,18 @@ def _strings(f, name):
         f[name].shape))
 
 
+def _odd_float(f, name):
+    """Dataset ``name`` of a 17-byte float type (sign bit 97, exponent 52-62, mantissa
+    0-51) that no numpy type holds: what bytes overwritten in a datatype message can make."""
+    shape = f[name].shape
+    del f[name]
+    t = h5py.h5t.IEEE_F64LE.copy()
+    t.set_size(17)
+    t.set_precision(98)
+    t.set_fields(97, 52, 11, 0, 52)
+    h5py.h5d.create(f.id, name.encode(), t, h5py.h5s.create_simple(shape))
+
+
 def _conn_past(f):
     """One node id of /mesh/conn past the last node."""
     conn = f["mesh/conn"][()]
@@ -154,6 +166,8 @@ CORRUPT = {
     "temp-node.h5": lambda f: _replace(f, "frames/temperature", f["frames/temperature"][:, 1:]),
     "gauge-str.h5": lambda f: _strings(f, "gauges/hammer/stress"),
     "time-back.h5": _set("frames/time", 2, -1.0),
+    "time-zero.h5": lambda f: f["frames/time"].__setitem__(slice(None), 0.0),
+    "energy-odd.h5": lambda f: _odd_float(f, "energy/total"),
     "time-nan.h5": _set("frames/time", 1, np.nan),
     "body-past.h5": _set("mesh/elem_body", 0, 99),
     "kind-float.h5": lambda f: _replace(f, "mesh/body_kind", f["mesh/body_kind"][()] * 1.0),
@@ -276,6 +290,10 @@ CASES = {
     "analyse gauge strings": (["analyse", "gauge-str.h5"],
                               "gauge-str.h5: /gauges/hammer/stress: holds bytes"),
     "analyse time backwards": (["analyse", "time-back.h5"], "/frames/time: decreases at row 2"),
+    "analyse times all zero": (["analyse", "time-zero.h5"],
+                               "time-zero.h5: /frames/time: repeats at row 1 (0.0 after 0.0)"),
+    "analyse odd float type": (["analyse", "energy-odd.h5"], "energy-odd.h5: /energy/total: "
+                               "unreadable datatype (Insufficient precision in available types"),
     "analyse body past": (["analyse", "body-past.h5"], "body-past.h5: /mesh/elem_body: body"),
     "analyse energy missing": (["analyse", "energy-row.h5"], "energy-row.h5: /energy/total: "),
     # bench

@@ -331,6 +331,7 @@ def _hotspots_args(p):
     p.add_argument("-p", "--prefix", default="study-hotspots", help="writes <prefix>.csv, "
                    "<prefix>.json and the runs in <prefix>-runs/ (default study-hotspots)")
     p.add_argument("--force", action="store_true", help="overwrite existing output")
+    add_allow_huge(p, f"a run of more than {MAX_STEPS:.0e} steps")
 
 
 def _hotspots(args):
@@ -368,6 +369,7 @@ def _hotspots(args):
         raise InputError(f"--prefix: {folder} exists and is not a folder")
     study = hs.HotspotStudy(doc, thermal, folder, comm, rule)
     study.check_levels(levels)
+    study.check_steps(levels, args.allow_huge)
     if comm.rank == 0:
         if os.path.isdir(folder) and args.force:
             shutil.rmtree(folder)

@@ -106,6 +106,13 @@ class HotspotStudy:
         """Every level must be a multiple of the bed file's (InputError otherwise)."""
         self.runs.check_levels(levels)
 
+    def check_steps(self, levels, allow_huge=False):
+        """Refuse (pdfem.limits.check_runs) a study any of whose levels would run more than
+        MAX_STEPS steps, before the first run; nothing is written."""
+        safety = self.scene.resolved["time"]["safety"]
+        self.runs.check_steps([Setting(lv, self.rule, safety, 1.0, "grid") for lv in levels],
+                              allow_huge)
+
     def run_all(self, levels, thresholds, spot_threshold):
         """Run every level, take the census of each on rank 0 and return (rows, changes),
         the same on every rank."""

@@ -120,3 +120,18 @@ def test_a_thermal_shock_run_writes_its_census_with_the_summary(tmp_path):
     assert again.returncode == 2 and "hot-summary.json exists" in again.stderr
     again = pdfem(["analyse", "hot.h5", "-p", "hot", "--force"], tmp_path)
     assert again.returncode == 0, again.stderr
+
+
+def test_a_study_level_of_absurdly_many_steps_is_refused_up_front(tmp_path):
+    """time.end a million times too long: refused before the first run, nothing written."""
+    doc = packaged("shot912_small.toml")
+    doc["time"]["end"] = 3.0
+    for bc in doc["bc"]:
+        bc.pop("release", None)
+        bc.pop("ramp_down", None)
+    write_scene(tmp_path / "long.toml", doc)
+    p = pdfem(["study", "hotspots", "long.toml", "--levels", "1"], tmp_path)
+    assert p.returncode == 2, p.stderr
+    assert "time.end: about" in p.stderr and "--allow-huge" in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "study-hotspots-runs").exists()

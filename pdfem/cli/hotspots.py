@@ -117,6 +117,10 @@ def run(args):
     if not os.path.isfile(args.runfile):
         raise InputError(f"{args.runfile}: no such run file")
     thr, spot, tol, corner, plots = _options(args)
+    # Damaged metadata can hang the HDF5 library: read it in a child process first
+    from pdfem.io.probe import check_metadata
+
+    check_metadata(args.runfile)
     prefix = prefix_of(args.runfile) if args.prefix is None else args.prefix
     shock = _shock(args.runfile)
     # Refuse before the census when an output exists, and again once the census says

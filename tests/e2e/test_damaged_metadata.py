@@ -4,8 +4,8 @@ Two damages made on purpose (the byte-overwrite fuzzing of tests/test_fuzz_comma
 both at random): the first object of the run file's global heap (where h5py keeps its string
 attributes, the scene among them) given index 0 and size 0, over which the HDF5 library loops
 forever reading an attribute; and a group's local heap address set to all ones, on which it
-dies of SIGSEGV. analyse and export refuse both with one line naming the file, exit 2, the
-folder as it was (pdfem.io.probe walks the metadata in a child process first).
+dies of SIGSEGV. analyse, export and hotspots refuse both with one line naming the file,
+exit 2, the folder as it was (pdfem.io.probe walks the metadata in a child process first).
 """
 
 import contextlib
@@ -77,7 +77,7 @@ DAMAGES = {
 }
 
 
-@pytest.mark.parametrize("command", ["analyse", "export"])
+@pytest.mark.parametrize("command", ["analyse", "export", "hotspots"])
 @pytest.mark.parametrize("damage", sorted(DAMAGES))
 def test_damaged_metadata_is_refused(shock, tmp_path, command, damage):
     make, text = DAMAGES[damage]

@@ -21,16 +21,34 @@ def add_parser(sub):
     p.add_argument("runfile", help="run file (HDF5) with temperatures")
     p.add_argument("-o", "-p", "--prefix", dest="prefix", default=None,
                    help="prefix of the output files (default: the run file without .h5)")
-    p.add_argument("--thresholds", default="400,500,600", help="temperatures [K] of the hot "
-                   "area fractions, comma-separated (default 400,500,600)")
-    p.add_argument("--spot-threshold", default=None, help="temperature [K] above which "
-                   "elements form hot spots (default: the middle threshold)")
+    add_threshold_options(p)
     p.add_argument("--contact-tol", default="0.1", help="distance at which boundary edges "
                    "of two bodies touch, in element sizes (default 0.1)")
     p.add_argument("--corner-angle", default="40", help="turning angle [degrees] of the "
                    "boundary at a grain corner (default 40)")
     p.add_argument("--plots", default="png", help="figure format: png (default), pdf, none")
     p.add_argument("--force", action="store_true", help="overwrite existing output files")
+
+
+def add_threshold_options(p):
+    """--thresholds and --spot-threshold of the census (also study hotspots')."""
+    p.add_argument("--thresholds", default="400,500,600", help="temperatures [K] of the hot "
+                   "area fractions, comma-separated (default 400,500,600)")
+    p.add_argument("--spot-threshold", default=None, help="temperature [K] above which "
+                   "elements form hot spots (default: the middle threshold)")
+
+
+def thresholds_of(args):
+    """(sorted thresholds, spot threshold or None) from the options of
+    :func:`add_threshold_options`; InputError naming the option when one is bad."""
+    parts = [s.strip() for s in str(args.thresholds).split(",")]
+    if not parts or any(not s for s in parts):
+        raise InputError(f"--thresholds: expected temperatures separated by commas (got "
+                         f"{args.thresholds!r})")
+    thr = sorted({_number(s, "--thresholds") for s in parts})
+    spot = None if args.spot_threshold is None else _number(args.spot_threshold,
+                                                            "--spot-threshold")
+    return thr, spot
 
 
 def _number(text, option, lo=0.0, hi=math.inf, lo_open=True):
@@ -50,13 +68,7 @@ def _options(args):
     """(thresholds, spot threshold, contact tolerance, corner angle, plots) from ``args``."""
     from pdfem.analysis.hotwrite import PLOT_FORMATS
 
-    parts = [s.strip() for s in str(args.thresholds).split(",")]
-    if not parts or any(not s for s in parts):
-        raise InputError(f"--thresholds: expected temperatures separated by commas (got "
-                         f"{args.thresholds!r})")
-    thr = sorted({_number(s, "--thresholds") for s in parts})
-    spot = None if args.spot_threshold is None else _number(args.spot_threshold,
-                                                            "--spot-threshold")
+    thr, spot = thresholds_of(args)
     tol = _number(args.contact_tol, "--contact-tol", 0.0, lo_open=False)
     corner = _number(args.corner_angle, "--corner-angle", 0.0, 180.0)
     if args.plots not in PLOT_FORMATS:

@@ -317,6 +317,8 @@ def _width(args):
 
 
 def _hotspots_args(p):
+    from pdfem.cli.hotspots import add_threshold_options
+
     p.add_argument("scene", nargs="?", default=None, help="shock scene with a [shock] table, "
                    "run as its thermal variant when it has no [heat] (default: the packaged "
                    f"{DEFAULT_STUDY_SCENE})")
@@ -324,10 +326,7 @@ def _hotspots_args(p):
                    "grain; multiples of the bed file's level (default 1,2,3,4)")
     p.add_argument("--rule", default=None, help="element rule of every run, 1pt or 2x2 "
                    "(default: the scene's)")
-    p.add_argument("--thresholds", default="400,500,600", help="temperatures [K] of the hot "
-                   "area fractions (default 400,500,600)")
-    p.add_argument("--spot-threshold", type=float, default=None, help="temperature [K] above "
-                   "which elements form hot spots (default: the middle threshold)")
+    add_threshold_options(p)
     p.add_argument("-p", "--prefix", default="study-hotspots", help="writes <prefix>.csv, "
                    "<prefix>.json and the runs in <prefix>-runs/ (default study-hotspots)")
     p.add_argument("--force", action="store_true", help="overwrite existing output")
@@ -337,6 +336,7 @@ def _hotspots_args(p):
 def _hotspots(args):
     import json
 
+    from pdfem.cli.hotspots import thresholds_of
     from pdfem.cli.run import check_output_path
     from pdfem.parallel.mpi import world
     from pdfem.scene import check_ranks, load_scene, parse_scene
@@ -345,11 +345,7 @@ def _hotspots(args):
     comm = world()
     levels = _check(_numbers(args.levels, "--levels", int), lambda v: 1 <= v <= 10,
                     "--levels", "a level in [1, 10]")
-    thresholds = _check(_numbers(args.thresholds, "--thresholds"), lambda v: v > 0.0,
-                        "--thresholds", "a temperature > 0 K")
-    spot = args.spot_threshold
-    if spot is not None and not (math.isfinite(spot) and spot > 0.0):
-        raise InputError(f"--spot-threshold: {spot!r} is not a temperature > 0 K")
+    thresholds, spot = thresholds_of(args)
     path = _scene_path(args)
     scene = load_scene(path)
     if "shock" not in scene.resolved:

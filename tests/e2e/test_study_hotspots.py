@@ -81,8 +81,8 @@ def test_thermal_variant_switches_on_what_the_scene_can_have():
 BAD = {
     "no shock table": (["plain.toml"], "needs a scene with a [shock] table"),
     "bad rule": (["--rule", "3x3"], "--rule: expected 1pt or 2x2"),
-    "bad thresholds": (["--thresholds", "400,-1"], "--thresholds: -1.0 is not a temperature"),
-    "bad spot threshold": (["--spot-threshold", "nan"], "--spot-threshold: nan is not a "),
+    "bad thresholds": (["--thresholds", "400,-1"], "--thresholds: '-1' out of range"),
+    "bad spot threshold": (["--spot-threshold", "nan"], "--spot-threshold: 'nan' out of range"),
     "bad levels": (["--levels", "0"], "--levels: 0 is not a level in [1, 10]"),
 }
 

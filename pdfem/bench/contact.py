@@ -87,7 +87,7 @@ def _sample(sim, eff, n, k):
         step += time.perf_counter() - t0
         # Contact counts, outside the timed call
         active += (eff._last["active"] == C_ACTIVE).sum() / n
-        evaluated += eff._last["active"].shape[0] / n
+        evaluated += eff._last["evaluated"] / n
     return (step / k, (tm["contact_detection"] - d0) / k, (tm["contact_forces"] - f0) / k,
             evaluated / k, active / k, (tm["elements"] - e0) / k)
 

@@ -8,7 +8,18 @@ Layout of the contact arrays (active, nodes, weights, fnod, res) as in pdfem.ker
 import numpy as np
 from numba import njit
 
-from pdfem.kernels.contact import C_ACTIVE, R_KSL, R_LEN, R_MEFF, R_STIFF, R_WIDTH
+from pdfem.kernels.contact import (
+    C_ACTIVE,
+    R_DAMP,
+    R_DELTA,
+    R_DISS,
+    R_ENERGY,
+    R_KSL,
+    R_LEN,
+    R_MEFF,
+    R_STIFF,
+    R_WIDTH,
+)
 from pdfem.kernels.contact_law import contact_dt
 
 
@@ -30,6 +41,51 @@ def accumulate_sorted(order, active, nodes, fnod, n_owned, f):
                 continue
             f[nd, 0] += fnod[p, k, 0]
             f[nd, 1] += fnod[p, k, 1]
+
+
+@njit(cache=True)
+def first_guarded(active, res, delta_max):
+    """First row that trips a guard: a guard code (active < 0), or an active contact whose mean
+    overlap res[:, R_DELTA] exceeds delta_max; -1 when none."""
+    for r in range(active.shape[0]):
+        if active[r] < 0 or (active[r] == C_ACTIVE and res[r, R_DELTA] > delta_max):
+            return r
+    return -1
+
+
+@njit(cache=True)
+def contact_bookkeeping(active, keys, us_out, res, elems, elem_body, isglobal, nb_own, all_mine,
+                        energy, fric, damp):
+    """History table and per-body sums of the active contacts (rows in key order).
+
+    Returns (hkey, hval): the keys and new shear histories of the active rows, in their order.
+    The stored energy, frictional and damping dissipation of each active row (res columns
+    R_ENERGY, R_DISS, R_DAMP) are added to energy, fric, damp (nbody,) at the body of its side
+    A (elems[:, 0]'s body) when that body is owned (< nb_own) and, unless all_mine, a grain
+    (isglobal 0): a block's contacts are counted by one rank. Each body's sum runs in row order
+    from its value on entry (np.bincount's order).
+    """
+    n = 0
+    for r in range(active.shape[0]):
+        if active[r] == C_ACTIVE:
+            n += 1
+    hkey = np.empty((n, 4), np.int64)
+    hval = np.empty(n)
+    i = 0
+    for r in range(active.shape[0]):
+        if active[r] != C_ACTIVE:
+            continue
+        for c in range(4):
+            hkey[i, c] = keys[r, c]
+        hval[i] = us_out[r]
+        i += 1
+        b = elem_body[elems[r, 0]]
+        if b >= nb_own or not (all_mine or isglobal[b] == 0):
+            continue
+        energy[b] += res[r, R_ENERGY]
+        fric[b] += res[r, R_DISS]
+        damp[b] += res[r, R_DAMP]
+    return hkey, hval
 
 
 @njit(cache=True)

@@ -163,6 +163,7 @@ class Contact(Effect):
         self.cand = np.zeros((0, 2), np.int64)
         self._rows = 0
         self._outputs(1024)
+        self._boxes = np.empty((0, 4))
         self._last = None
 
     def setup(self, sim):
@@ -265,6 +266,12 @@ class Contact(Effect):
                          np.empty((rows, NRES)))
         return self._buf
 
+    def _bbox(self, n):
+        """Scratch for the n elements' boxes (kept between steps)."""
+        if self._boxes.shape[0] != n:
+            self._boxes = np.empty((n, 4))
+        return self._boxes
+
     def _evaluate(self, sim, cand):
         s = sim.store
         dt = getattr(sim, "dt", 0.0)
@@ -274,7 +281,7 @@ class Contact(Effect):
                                        s.elen, s.emat, self.law.reshape(-1, L.NPAR),
                                        self.law.shape[0], NO_ROWS, self._wall_p0, self._wall_n,
                                        self._wall_mu, cand, s.hkey, s.hval, NO_HISTORY, False,
-                                       False, dt, *out)
+                                       False, dt, self._bbox(s.nelem), *out)
             if n <= self._rows:
                 break
             self._outputs(n + n // 4 + 64)

@@ -65,6 +65,7 @@ functions costs several times its arithmetic.
 import numpy as np
 from numba import njit
 
+from pdfem.kernels.broad_phase import element_bboxes
 from pdfem.kernels.contact_frame import (
     NNOD,
     alloc_overlap_work,
@@ -90,14 +91,11 @@ from pdfem.kernels.overlap import (
     K_Q,
     K_X,
     MAXV,
-    NTAG,
     OV_INSIDE,
     OV_NONE,
     OV_OK,
     OV_OVERFLOW,
     SLIVER,
-    T_EP,
-    T_EQ,
     T_KIND,
     T_SRC,
     alloc_clip_buffers,
@@ -160,8 +158,8 @@ def _clear(r, us_keep, code, active, nodes, weights, fnod, us_out, res):
 
 @njit(cache=True)
 def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, wall_p0, wall_n,
-                 wall_mu, cand, hkey, hval, us_in, dense, general, dt, active, keys, elems, nodes,
-                 weights, fnod, us_out, res):
+                 wall_mu, cand, hkey, hval, us_in, dense, general, dt, bbox, active, keys, elems,
+                 nodes, weights, fnod, us_out, res):
     """Evaluate the candidate contacts cand (nc, 2): element pairs (a, b) of different bodies and
     element-wall pairs (e, -1 - w).
 
@@ -177,7 +175,8 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
     hval (nh,) (0 if absent; the candidates must then be sorted by key: a merge).
 
     A candidate is evaluated when the step's exact test of the broad phase passes (the two
-    elements' boxes overlap; the element's box reaches behind the wall). Outputs (module
+    elements' boxes overlap; the element's box reaches behind the wall); bbox (ne, 4) is
+    scratch for the boxes. Outputs (module
     docstring, plus keys (4,) the global contact key, a wall's (gid, elem, -1 - w, 0), and
     elems the two elements, -1 for a wall): with dense, row c for candidate c (C_NONE rows
     cleared); otherwise one row per contact that touches or is guarded, in candidate order,
@@ -200,6 +199,9 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
     h = 0
     nbad = 0
     nev = 0
+    held = -1
+    # Every element's box (broad_phase.element_bboxes: the candidates' test)
+    element_bboxes(x, conn, 0, conn.shape[0], bbox)
     for c in range(cand.shape[0]):
         a = cand[c, 0]
         b = cand[c, 1]
@@ -211,46 +213,32 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
         flip = not wall and (egid[a] > egid[b] or (egid[a] == egid[b] and eloc[a] > eloc[b]))
         if flip:
             a, b = b, a
-        # Corners and box of A (and B): the broad phase's exact test of this step
-        for k in range(4):
-            xa[k, 0] = x[conn[a, k], 0]
-            xa[k, 1] = x[conn[a, k], 1]
-        ax0 = xa[0, 0]
-        ay0 = xa[0, 1]
-        ax1 = xa[0, 0]
-        ay1 = xa[0, 1]
-        for k in range(1, 4):
-            ax0 = min(ax0, xa[k, 0])
-            ay0 = min(ay0, xa[k, 1])
-            ax1 = max(ax1, xa[k, 0])
-            ay1 = max(ay1, xa[k, 1])
+        # The broad phase's exact test of this step, on the elements' boxes
         if wall:
             wnx = wall_n[w, 0]
             wny = wall_n[w, 1]
-            lo = min(wnx * (ax0 - wall_p0[w, 0]), wnx * (ax1 - wall_p0[w, 0])) + \
-                min(wny * (ay0 - wall_p0[w, 1]), wny * (ay1 - wall_p0[w, 1]))
+            lo = min(wnx * (bbox[a, 0] - wall_p0[w, 0]), wnx * (bbox[a, 2] - wall_p0[w, 0])) + \
+                min(wny * (bbox[a, 1] - wall_p0[w, 1]), wny * (bbox[a, 3] - wall_p0[w, 1]))
             near = lo < 0.0
         else:
-            for k in range(4):
-                xb[k, 0] = x[conn[b, k], 0]
-                xb[k, 1] = x[conn[b, k], 1]
-            bx0 = xb[0, 0]
-            by0 = xb[0, 1]
-            bx1 = xb[0, 0]
-            by1 = xb[0, 1]
-            for k in range(1, 4):
-                bx0 = min(bx0, xb[k, 0])
-                by0 = min(by0, xb[k, 1])
-                bx1 = max(bx1, xb[k, 0])
-                by1 = max(by1, xb[k, 1])
-            near = (ax0 - bx1 <= 0.0 and bx0 - ax1 <= 0.0 and ay0 - by1 <= 0.0
-                    and by0 - ay1 <= 0.0)
+            near = (bbox[a, 0] - bbox[b, 2] <= 0.0 and bbox[b, 0] - bbox[a, 2] <= 0.0
+                    and bbox[a, 1] - bbox[b, 3] <= 0.0 and bbox[b, 1] - bbox[a, 3] <= 0.0)
         r = c if dense else min(q, last)
         if not near:
             if dense:
                 _clear(r, 0.0, C_NONE, active, nodes, weights, fnod, us_out, res)
             continue
         nev += 1
+        # Corners of the two elements (A's kept while consecutive candidates share it)
+        if a != held:
+            for k in range(4):
+                xa[k, 0] = x[conn[a, k], 0]
+                xa[k, 1] = x[conn[a, k], 1]
+            held = a
+        if not wall:
+            for k in range(4):
+                xb[k, 0] = x[conn[b, k], 0]
+                xb[k, 1] = x[conn[b, k], 1]
         # The global key (the caller's order), and the shear history
         ca = cand[c, 0]
         key0 = egid[ca]
@@ -315,13 +303,12 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                         break
                 kc = 4
                 if st == OV_OK:
-                    # A clipped by B's four edge lines, slots 0 and 1 (overlap.clip_into)
+                    # A clipped by B's four edge lines, slots 0 and 1 (overlap.clip_into; of the
+                    # tags, only the kind and the source edge, the two read here)
                     for i in range(4):
                         px[0, i] = xa[i, 0]
                         py[0, i] = xa[i, 1]
                         pt[0, i, T_KIND] = K_P
-                        pt[0, i, T_EP] = i
-                        pt[0, i, T_EQ] = -1
                         pt[0, i, T_SRC] = i
                     sl = 0
                     for j in range(4):
@@ -339,7 +326,6 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                             se = lx * (px[sl, je] - x0) + ly * (py[sl, je] - y0)
                             src = pt[sl, js, T_SRC]
                             kind = K_X if src >= 0 else K_Q
-                            ep = src if src >= 0 else -1
                             if se <= 0.0:
                                 if ss > 0.0:
                                     if kn >= MAXV:
@@ -349,8 +335,6 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                                     px[d, kn] = px[sl, js] + t * (px[sl, je] - px[sl, js])
                                     py[d, kn] = py[sl, js] + t * (py[sl, je] - py[sl, js])
                                     pt[d, kn, T_KIND] = kind
-                                    pt[d, kn, T_EP] = ep
-                                    pt[d, kn, T_EQ] = j
                                     pt[d, kn, T_SRC] = src
                                     kn += 1
                                 if kn >= MAXV:
@@ -358,8 +342,8 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                                     break
                                 px[d, kn] = px[sl, je]
                                 py[d, kn] = py[sl, je]
-                                for tc in range(NTAG):
-                                    pt[d, kn, tc] = pt[sl, je, tc]
+                                pt[d, kn, T_KIND] = pt[sl, je, T_KIND]
+                                pt[d, kn, T_SRC] = pt[sl, je, T_SRC]
                                 kn += 1
                             elif ss <= 0.0:
                                 if kn >= MAXV:
@@ -369,8 +353,6 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                                 px[d, kn] = px[sl, js] + t * (px[sl, je] - px[sl, js])
                                 py[d, kn] = py[sl, js] + t * (py[sl, je] - py[sl, js])
                                 pt[d, kn, T_KIND] = kind
-                                pt[d, kn, T_EP] = ep
-                                pt[d, kn, T_EQ] = j
                                 pt[d, kn, T_SRC] = -1 - j
                                 kn += 1
                             js = je
@@ -490,30 +472,38 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
         if st != OV_OK:
             code = C_OVERFLOW if st == OV_OVERFLOW else C_INSIDE
         else:
-            for side in range(1 if wall else 2):
-                e = a if side == 0 else b
-                best = np.inf
-                for k in range(4):
-                    if ebnd[e, k] == 0:
-                        continue
-                    k1 = (k + 1) % 4
-                    ux = xa[k, 0] if side == 0 else xb[k, 0]
-                    uy = xa[k, 1] if side == 0 else xb[k, 1]
-                    dx = (xa[k1, 0] if side == 0 else xb[k1, 0]) - ux
-                    dy = (xa[k1, 1] if side == 0 else xb[k1, 1]) - uy
-                    f = ((cx - ux) * dx + (cy - uy) * dy) / (dx * dx + dy * dy)
-                    f = min(max(f, 0.0), 1.0)
-                    rx = ux + f * dx - cx
-                    ry = uy + f * dy - cy
-                    d2 = rx * rx + ry * ry
-                    if d2 < best:
-                        best = d2
-                        if side == 0:
-                            ka = k
-                            sa = f
-                        else:
-                            kb = k
-                            sb = f
+            best = np.inf
+            for k in range(4):
+                if ebnd[a, k] == 0:
+                    continue
+                k1 = (k + 1) % 4
+                dx = xa[k1, 0] - xa[k, 0]
+                dy = xa[k1, 1] - xa[k, 1]
+                f = ((cx - xa[k, 0]) * dx + (cy - xa[k, 1]) * dy) / (dx * dx + dy * dy)
+                f = min(max(f, 0.0), 1.0)
+                rx = xa[k, 0] + f * dx - cx
+                ry = xa[k, 1] + f * dy - cy
+                d2 = rx * rx + ry * ry
+                if d2 < best:
+                    best = d2
+                    ka = k
+                    sa = f
+            best = np.inf
+            for k in range(0 if wall else 4):
+                if ebnd[b, k] == 0:
+                    continue
+                k1 = (k + 1) % 4
+                dx = xb[k1, 0] - xb[k, 0]
+                dy = xb[k1, 1] - xb[k, 1]
+                f = ((cx - xb[k, 0]) * dx + (cy - xb[k, 1]) * dy) / (dx * dx + dy * dy)
+                f = min(max(f, 0.0), 1.0)
+                rx = xb[k, 0] + f * dx - cx
+                ry = xb[k, 1] + f * dy - cy
+                d2 = rx * rx + ry * ry
+                if d2 < best:
+                    best = d2
+                    kb = k
+                    sb = f
             if wall:
                 code = C_NOEDGE if ka < 0 or not length > 0.0 else C_ACTIVE
             else:
@@ -637,8 +627,9 @@ def element_pair_forces(x, du, conn, ebnd, egid, eloc, elen, pairs, params, us_i
     none = np.zeros((0, 2))
     return contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, np.zeros(0, np.int64), params, 0,
                         np.arange(n), none, none, np.zeros(0), pairs.astype(np.int64),
-                        np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt, active,
-                        keys, elems, nodes, weights, fnod, us_out, res)[1]
+                        np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,
+                        np.empty((conn.shape[0], 4)), active, keys, elems, nodes, weights,
+                        fnod, us_out, res)[1]
 
 
 def element_wall_forces(x, du, conn, ebnd, elen, elems, wall_p0, wall_n, params, us_in, active,
@@ -657,5 +648,6 @@ def element_wall_forces(x, du, conn, ebnd, elen, elems, wall_p0, wall_n, params,
     return contact_pass(x, du, m, conn, ebnd, ids, ids, elen, ids, params, 0, np.arange(n),
                         np.ascontiguousarray(wall_p0, float), np.ascontiguousarray(wall_n, float),
                         np.ascontiguousarray(params[:, P_MU]), cand,
-                        np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt, active,
-                        keys, rows, nodes, weights, fnod, us_out, res)[1]
+                        np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,
+                        np.empty((conn.shape[0], 4)), active, keys, rows, nodes, weights, fnod,
+                        us_out, res)[1]

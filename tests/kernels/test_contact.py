@@ -587,7 +587,7 @@ def pass_args(x, conn, ebnd, egid, eloc, elen, cand, params, us=None, walls=None
     args = (x, 1e-6 * np.cos(np.arange(x.size)).reshape(x.shape), np.linspace(1.0, 2.0, len(x)),
             conn, ebnd, egid, eloc, elen, np.zeros(len(conn), np.int64), params, 0,
             np.arange(n), p0, wn, mu, np.asarray(cand, np.int64), hkey, hval, us, dense, general,
-            1e-9)
+            1e-9, np.empty((len(conn), 4)))
     return args, out
 
 

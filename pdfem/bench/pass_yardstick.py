@@ -3,12 +3,13 @@ one element pair on its own.
 
 ``pass_yardstick(sim, repeat)`` takes the candidates, history and positions of a Simulation's
 current step and times the numba pass (pdfem.kernels.contact.contact_pass, as the contact
-effect calls it) and the C twin on them: CPU seconds per call (process time: the figure a
-shared machine distorts least), the median of ``repeat`` calls, and whether the two give the
-same bits. Per-pair figures divide by the candidates, by the element pairs evaluated (their
-boxes overlap this step) and by the contacts (overlapping pairs). Then the arithmetic of a
-single pair: one overlapping pair, and one pair the early out rejects, each evaluated
-``REPS`` times in a row (its data in cache, its branches predicted), numba and C.
+effect calls it, less the adding of the forces into the force array) and the C twin on them:
+CPU seconds per call (process time: the figure a shared machine distorts least), the median
+of ``repeat`` calls, and whether the two give the same bits. Per-pair figures divide by the
+candidates, by the element pairs evaluated (their boxes overlap this step) and by the contacts
+(overlapping pairs). Then the arithmetic of a single pair: one overlapping pair, and one pair
+the early out rejects, each evaluated ``REPS`` times in a row (its data in cache, its
+branches predicted), numba and C.
 """
 
 import statistics
@@ -64,7 +65,8 @@ def pass_yardstick(sim, repeat):
 
     def numba_args(cands, hkey, hval):
         return common + (np.zeros(0, np.int64),) + walls + (cands, hkey, hval, np.zeros(0),
-                                                             False, False, dt, bbox)
+                                                             False, False, dt, bbox,
+                                                             np.zeros((0, 2)), 0)
 
     def c_args(cands, hkey, hval):
         return common + walls + (cands, hkey, hval, dt, bbox)

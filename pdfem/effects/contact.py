@@ -73,6 +73,8 @@ REACH_SLACK = 1e-6
 # No per-candidate law rows or history (contact_pass: the materials' law, the sorted history)
 NO_ROWS = np.zeros(0, np.int64)
 NO_HISTORY = np.zeros(0)
+# No force array: the pass leaves the forces to _apply (blocks' rows are gathered first)
+NO_FORCES = np.zeros((0, 2))
 # Outward normals of the domain walls (pointing into the domain) and their box coordinate
 WALL_SIDES = {"left": ((1.0, 0.0), 0), "bottom": ((0.0, 1.0), 1), "right": ((-1.0, 0.0), 2),
               "top": ((0.0, -1.0), 3)}
@@ -275,19 +277,25 @@ class Contact(Effect):
     def _evaluate(self, sim, cand):
         s = sim.store
         dt = getattr(sim, "dt", 0.0)
+        # Without blocks every contact is local and in key order: the pass adds the forces (all
+        # of them, also those whose rows did not fit: a second call only writes the rows)
+        added = sim.nglobal == 0
+        forces = sim.fc if added else NO_FORCES
         while True:
             out = self._outputs(self._rows)
             n, _, nev = contact_pass(s.x, sim.du, s.m, s.conn, s.ebnd, s.elem_gid, s.elem_loc,
                                        s.elen, s.emat, self.law.reshape(-1, L.NPAR),
                                        self.law.shape[0], NO_ROWS, self._wall_p0, self._wall_n,
                                        self._wall_mu, cand, s.hkey, s.hval, NO_HISTORY, False,
-                                       False, dt, self._bbox(s.nelem), *out)
+                                       False, dt, self._bbox(s.nelem), forces, s.nn_own,
+                                       *out)
             if n <= self._rows:
                 break
             self._outputs(n + n // 4 + 64)
+            forces = NO_FORCES
         active, keys, elems, nodes, weights, fnod, us_out, res = (o[:n] for o in out)
         self._check(sim, keys, active, res)
-        self._apply(sim, keys, active, nodes, weights, fnod, res, elems)
+        self._apply(sim, keys, active, nodes, weights, fnod, res, elems, not added)
         self._bookkeeping(sim, keys, active, us_out, res, elems)
         self._last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys,
                       "candidates": cand.shape[0], "evaluated": nev}
@@ -304,9 +312,9 @@ class Contact(Effect):
             sim.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
                      f"and {other} is {what}")
 
-    def _apply(self, sim, keys, active, nodes, weights, fnod, res, elems):
-        """Add forces (and contact heat) to owned nodes in key order (the rows' order);
-        block-side rows are gathered from all ranks."""
+    def _apply(self, sim, keys, active, nodes, weights, fnod, res, elems, forces):
+        """Add forces (unless the pass did: forces False) and contact heat to owned nodes in
+        key order (the rows' order); block-side rows are gathered from all ranks."""
         s = sim.store
         # Heat of each contact on its two sides (this step, over sim.dt), its friction part,
         # and the elements of the two sides (-1: a wall)
@@ -319,7 +327,7 @@ class Contact(Effect):
         order = np.arange(active.shape[0])
         # No blocks: every contact is local, already in key order
         if sim.nglobal == 0:
-            self._add(sim, order, active, nodes, weights, fnod, q, elems)
+            self._add(sim, order, active, nodes, weights, fnod, q, elems, forces)
             return
         isg = s.isglobal[s.elem_body]
         mixed = (elems[:, 1] >= 0) & (isg[elems[:, 0]] != isg[elems[:, 1]])
@@ -357,11 +365,13 @@ class Contact(Effect):
             e_all = np.concatenate([elems, gel]).astype(np.int64)
         self._add(sim, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all, e_all)
 
-    def _add(self, sim, order, active, nodes, weights, fnod, q, elems):
-        """Forces (and heat, q not None) of the contacts in the given order to owned nodes,
-        and the heat to the owned elements of the two sides (elems) by mechanism."""
+    def _add(self, sim, order, active, nodes, weights, fnod, q, elems, forces=True):
+        """Forces (with forces) and heat (q not None) of the contacts in the given order to
+        owned nodes, and the heat to the owned elements of the two sides (elems) by
+        mechanism."""
         s = sim.store
-        accumulate_sorted(order, active, nodes, fnod, s.nn_own, sim.fc)
+        if forces:
+            accumulate_sorted(order, active, nodes, fnod, s.nn_own, sim.fc)
         if q is not None:
             accumulate_heat_sorted(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own,
                                    sim.heat.src)

@@ -158,8 +158,8 @@ def _clear(r, us_keep, code, active, nodes, weights, fnod, us_out, res):
 
 @njit(cache=True)
 def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, wall_p0, wall_n,
-                 wall_mu, cand, hkey, hval, us_in, dense, general, dt, bbox, active, keys, elems,
-                 nodes, weights, fnod, us_out, res):
+                 wall_mu, cand, hkey, hval, us_in, dense, general, dt, bbox, fc, n_owned, active,
+                 keys, elems, nodes, weights, fnod, us_out, res):
     """Evaluate the candidate contacts cand (nc, 2): element pairs (a, b) of different bodies and
     element-wall pairs (e, -1 - w).
 
@@ -176,7 +176,10 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
 
     A candidate is evaluated when the step's exact test of the broad phase passes (the two
     elements' boxes overlap; the element's box reaches behind the wall); bbox (ne, 4) is
-    scratch for the boxes. Outputs (module
+    scratch for the boxes. With fc (nn, 2) not empty, each contact's nodal forces are added to
+    fc at its owned nodes (< n_owned) as its row is written: contact_step.accumulate_sorted in
+    row order, without reading the rows again (every contact's, also of rows that land in the
+    scratch row). Outputs (module
     docstring, plus keys (4,) the global contact key, a wall's (gid, elem, -1 - w, 0), and
     elems the two elements, -1 for a wall): with dense, row c for candidate c (C_NONE rows
     cleared); otherwise one row per contact that touches or is guarded, in candidate order,
@@ -194,6 +197,7 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
     last = active.shape[0] - 1
     nh = hkey.shape[0]
     by_row = lrow.shape[0] > 0
+    add = fc.shape[0] > 0
     lookup = us_in.shape[0] == 0
     q = 0
     h = 0
@@ -606,6 +610,13 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
         res[r, R_KSL] = ks * length
         res[r, R_MEFF] = meff
         res[r, R_AREA] = area
+        if add:
+            for o in range(NNOD):
+                nd = nodes[r, o]
+                if nd < 0 or nd >= n_owned:
+                    continue
+                fc[nd, 0] += fnod[r, o, 0]
+                fc[nd, 1] += fnod[r, o, 1]
     return q, nbad, nev
 
 
@@ -628,8 +639,8 @@ def element_pair_forces(x, du, conn, ebnd, egid, eloc, elen, pairs, params, us_i
     return contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, np.zeros(0, np.int64), params, 0,
                         np.arange(n), none, none, np.zeros(0), pairs.astype(np.int64),
                         np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,
-                        np.empty((conn.shape[0], 4)), active, keys, elems, nodes, weights,
-                        fnod, us_out, res)[1]
+                        np.empty((conn.shape[0], 4)), np.zeros((0, 2)), 0, active, keys,
+                        elems, nodes, weights, fnod, us_out, res)[1]
 
 
 def element_wall_forces(x, du, conn, ebnd, elen, elems, wall_p0, wall_n, params, us_in, active,
@@ -649,5 +660,5 @@ def element_wall_forces(x, du, conn, ebnd, elen, elems, wall_p0, wall_n, params,
                         np.ascontiguousarray(wall_p0, float), np.ascontiguousarray(wall_n, float),
                         np.ascontiguousarray(params[:, P_MU]), cand,
                         np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,
-                        np.empty((conn.shape[0], 4)), active, keys, rows, nodes, weights, fnod,
-                        us_out, res)[1]
+                        np.empty((conn.shape[0], 4)), np.zeros((0, 2)), 0, active, keys,
+                        rows, nodes, weights, fnod, us_out, res)[1]

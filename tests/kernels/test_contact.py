@@ -587,7 +587,7 @@ def pass_args(x, conn, ebnd, egid, eloc, elen, cand, params, us=None, walls=None
     args = (x, 1e-6 * np.cos(np.arange(x.size)).reshape(x.shape), np.linspace(1.0, 2.0, len(x)),
             conn, ebnd, egid, eloc, elen, np.zeros(len(conn), np.int64), params, 0,
             np.arange(n), p0, wn, mu, np.asarray(cand, np.int64), hkey, hval, us, dense, general,
-            1e-9, np.empty((len(conn), 4)))
+            1e-9, np.empty((len(conn), 4)), np.zeros((0, 2)), 0)
     return args, out
 
 
@@ -640,11 +640,19 @@ def test_compact_rows_and_history_merge_equal_the_dense_rows():
     args, dense = pass_args(x, conn, ebnd, egid, eloc, elen, cand, par, us=us, walls=walls)
     nd = C.contact_pass(*args, *dense)
     hist = (keys[held], us[held])
+    # The forces in candidate (key) order, owned nodes only
+    n_owned = len(x) - 40
+    ref = np.zeros_like(x)
+    CS.accumulate_sorted(np.arange(len(cand)), dense[0], dense[3], dense[5], n_owned, ref)
     for rows in (4, 200):
         args, comp = pass_args(x, conn, ebnd, egid, eloc, elen, cand, par, walls=walls,
                                hist=hist, dense=False, rows=rows)
+        # Added by the pass itself, every contact's also when its row does not fit
+        fc = np.zeros_like(x)
+        args = args[:-2] + (fc, n_owned)
         n, nbad, nev = C.contact_pass(*args, *comp)
         assert (n, nbad) == (np.sum(dense[0] != C.C_NONE), nd[1]) and nev == nd[2]
+        assert np.array_equal(fc, ref) and fc[:n_owned].any() and not fc[n_owned:].any()
     touch = np.flatnonzero(dense[0] != C.C_NONE)
     assert 20 < len(touch) < len(cand) - 20 and np.any(cand[touch, 1] < 0)
     for a, b in zip(dense, comp, strict=True):

@@ -44,6 +44,31 @@ def _cpu_median(fn, args, calls):
     return statistics.median(times)
 
 
+def _one_pair(sim, eff, pair, law, nmat, walls, dt, cfn):
+    """CPU seconds of one element pair evaluated REPS times in a row, numba and C: the pair's
+    two elements and their nodes alone (the pass's box of every element and its history merge
+    then cost next to nothing), its history row if it has one."""
+    s = sim.store
+    nodes, conn = np.unique(s.conn[pair], return_inverse=True)
+    conn = np.ascontiguousarray(conn.reshape(2, 4).astype(np.int64))
+    e = np.asarray(pair)
+    key = (s.elem_gid[e[0]], s.elem_loc[e[0]], s.elem_gid[e[1]], s.elem_loc[e[1]])
+    held = np.all(s.hkey == key, axis=1)
+    hkey, hval = np.ascontiguousarray(s.hkey[held]), np.ascontiguousarray(s.hval[held])
+    common = (np.ascontiguousarray(s.x[nodes]), np.ascontiguousarray(sim.du[nodes]),
+              np.ascontiguousarray(s.m[nodes]), conn, np.ascontiguousarray(s.ebnd[e]),
+              s.elem_gid[e], s.elem_loc[e], s.elen[e], np.ascontiguousarray(s.emat[e]), law,
+              nmat)
+    reps = np.ascontiguousarray(np.tile([0, 1], (REPS, 1)).astype(np.int64))
+    bbox = np.empty((2, 4))
+    o = _outputs(REPS + 1)
+    args = common + (np.zeros(0, np.int64),) + walls + (reps, hkey, hval, np.zeros(0), False,
+                                                        False, dt, bbox, np.zeros((0, 2)), 0)
+    cargs = common + walls + (reps, hkey, hval, dt, bbox)
+    return {"numba": _cpu_median(contact_pass, args + o, CALLS) / REPS,
+            "c": _cpu_median(cfn, cargs + o, CALLS) / REPS}
+
+
 def pass_yardstick(sim, repeat):
     """Figures of the numba pass and its C twin on sim's current step (module docstring), or
     None without a C compiler."""
@@ -96,13 +121,8 @@ def pass_yardstick(sim, repeat):
             apart = np.array([a, b])
             break
     for name, one in (("overlapping", pair), ("apart", apart)):
-        if one is None:
-            continue
-        reps = np.ascontiguousarray(np.tile(one, (REPS, 1)))
-        o = _outputs(REPS + 1)
-        out[name] = {"numba": _cpu_median(contact_pass, numba_args(reps, s.hkey, s.hval) + o,
-                                          CALLS) / REPS,
-                     "c": _cpu_median(cfn, c_args(reps, s.hkey, s.hval) + o, CALLS) / REPS}
+        if one is not None:
+            out[name] = _one_pair(sim, eff, one, law, nmat, walls, dt, cfn)
     return out
 
 

@@ -243,20 +243,6 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
             for k in range(4):
                 xb[k, 0] = x[conn[b, k], 0]
                 xb[k, 1] = x[conn[b, k], 1]
-        # The global key (the caller's order), and the shear history
-        ca = cand[c, 0]
-        key0 = egid[ca]
-        key1 = eloc[ca]
-        key2 = b if wall else egid[cand[c, 1]]
-        key3 = 0 if wall else eloc[cand[c, 1]]
-        if lookup:
-            while h < nh and _key_less(hkey[h, 0], hkey[h, 1], hkey[h, 2], hkey[h, 3], key0,
-                                       key1, key2, key3):
-                h += 1
-            us = hval[h] if h < nh and not _key_less(key0, key1, key2, key3, hkey[h, 0],
-                                                     hkey[h, 1], hkey[h, 2], hkey[h, 3]) else 0.0
-        else:
-            us = us_in[c]
         # Overlap, area gradient g and contact frame (n from A into B, width, centroid c)
         width = 0.0
         if wall:
@@ -467,6 +453,21 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
             if dense:
                 _clear(r, 0.0, C_NONE, active, nodes, weights, fnod, us_out, res)
             continue
+        # The global key (the caller's order), and the shear history (looked up only for the
+        # pairs that touch: the merge's cursor moves forward all the same)
+        ca = cand[c, 0]
+        key0 = egid[ca]
+        key1 = eloc[ca]
+        key2 = b if wall else egid[cand[c, 1]]
+        key3 = 0 if wall else eloc[cand[c, 1]]
+        if lookup:
+            while h < nh and _key_less(hkey[h, 0], hkey[h, 1], hkey[h, 2], hkey[h, 3], key0,
+                                       key1, key2, key3):
+                h += 1
+            us = hval[h] if h < nh and not _key_less(key0, key1, key2, key3, hkey[h, 0],
+                                                     hkey[h, 1], hkey[h, 2], hkey[h, 3]) else 0.0
+        else:
+            us = us_in[c]
         # The boundary edge of each side nearest to the contact point, and the parameter of
         # the point's projection on it (contact_frame.nearest_edge); the guards
         ka = -1

@@ -176,16 +176,19 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
 
     A candidate is evaluated when the step's exact test of the broad phase passes (the two
     elements' boxes overlap; the element's box reaches behind the wall); bbox (ne, 4) is
-    scratch for the boxes. With fc (nn, 2) not empty, each contact's nodal forces are added to
-    fc at its owned nodes (< n_owned) as its row is written: contact_step.accumulate_sorted in
-    row order, without reading the rows again (every contact's, also of rows that land in the
-    scratch row). Outputs (module
-    docstring, plus keys (4,) the global contact key, a wall's (gid, elem, -1 - w, 0), and
-    elems the two elements, -1 for a wall): with dense, row c for candidate c (C_NONE rows
-    cleared); otherwise one row per contact that touches or is guarded, in candidate order,
-    where the arrays' last row is scratch: contacts that do not fit land there, and the caller
-    calls again with room for all. Returns (rows written or needed, guarded contacts,
-    candidates evaluated).
+    scratch for the boxes.
+
+    Outputs (module docstring, plus keys (4,) the global contact key, a wall's (gid, elem,
+    -1 - w, 0), and elems the two elements, -1 for a wall): with dense, row c for candidate c
+    (C_NONE rows cleared); otherwise one row per contact that touches or is guarded, in
+    candidate order, where the arrays' last row is scratch: contacts that do not fit land
+    there, and the caller calls again with room for all. With fc (nn, 2) not empty, each
+    contact's nodal forces are added to fc at its owned nodes (< n_owned) as its row is
+    written: contact_step.accumulate_sorted in row order, without reading the rows again (every
+    contact's, also those that land in the scratch row). general: every pair through the clip
+    library (contact_frame.pair_overlap), the convex ones too, which the pass otherwise
+    evaluates in its own loop with the same operations (the reference the tests compare it
+    with). Returns (rows written or needed, guarded contacts, candidates evaluated).
     """
     px, py, pt = alloc_clip_buffers()
     q4, tri, tmap = alloc_overlap_work()

@@ -77,19 +77,21 @@ def _coordination(eff, n):
 
 def _sample(sim, eff, n, k):
     """Run k steps; per step: step s, detection s, forces s, element pairs evaluated and
-    active per grain."""
+    active per grain, element s, and the step's CPU time s (this process)."""
     tm = sim.timers.seconds
     d0, f0, e0 = tm["contact_detection"], tm["contact_forces"], tm["elements"]
-    step = active = evaluated = 0.0
+    step = active = evaluated = cpu = 0.0
     for _ in range(k):
         t0 = time.perf_counter()
+        c0 = time.process_time()
         sim.step()
+        cpu += time.process_time() - c0
         step += time.perf_counter() - t0
         # Contact counts, outside the timed call
         active += (eff._last["active"] == C_ACTIVE).sum() / n
-        evaluated += eff._last["active"].shape[0] / n
+        evaluated += eff._last["evaluated"] / n
     return (step / k, (tm["contact_detection"] - d0) / k, (tm["contact_forces"] - f0) / k,
-            evaluated / k, active / k, (tm["elements"] - e0) / k)
+            evaluated / k, active / k, (tm["elements"] - e0) / k, cpu / k)
 
 
 def _drift_check_s(sim, repeat):
@@ -105,9 +107,10 @@ def _drift_check_s(sim, repeat):
     return statistics.median(times)
 
 
-def run_contact(n, repeat, material="elastic"):
+def run_contact(n, repeat, material="elastic", yardstick=False):
     """Build an n-grain bed of ``material`` grains (pdfem.bench.beds.MATERIALS), time
-    ``repeat`` samples; return a dict of figures."""
+    ``repeat`` samples; return a dict of figures (with yardstick, also the contact pass of
+    the last step against its C twin, pdfem.bench.pass_yardstick)."""
     from mpi4py import MPI
 
     from pdfem.scene import parse_scene
@@ -130,14 +133,20 @@ def run_contact(n, repeat, material="elastic"):
     k = steps_per_sample(n)
     reb0 = sim.timers.calls["migration"]
     samples = [_sample(sim, eff, n, k) for _ in range(repeat)]
-    step, det, frc, evald, act, elem = (statistics.median(col)
-                                        for col in zip(*samples, strict=True))
+    step, det, frc, evald, act, elem, cpu = (statistics.median(col)
+                                             for col in zip(*samples, strict=True))
     share = statistics.median((s[1] + s[2]) / s[0] for s in samples)
     coord = _coordination(eff, n)
     drift = _drift_check_s(sim, repeat)
+    yard = None
+    if yardstick:
+        from pdfem.bench.pass_yardstick import pass_yardstick
+
+        yard = pass_yardstick(sim, repeat)
     # Resident memory after the steps, freed pages returned (what the run holds)
     trim()
-    out = {"grains": n, "elements": int(sim.store.ne_own), "steps": k, "step": step,
+    out = {"grains": n, "elements": int(sim.store.ne_own), "steps": k, "step": step, "cpu": cpu,
+           "yardstick": yard,
            "detection": det, "forces": frc, "elements_s": elem, "contact": det + frc,
            "share": share, "drift": drift,
            "evaluated": evald, "active": act, "coordination": coord, "setup": setup,
@@ -151,6 +160,8 @@ def run_contact(n, repeat, material="elastic"):
 
 def print_contact(sizes, repeat, log=print, material="elastic"):
     """Run the contact benchmark for each bed size and print its table; return the rows."""
+    from pdfem.bench.pass_yardstick import print_pass_yardstick
+
     log(f"pdfem bench contact: dense beds of level-1 {material} grains (6 elements each, 1-point "
         "rule), serial, "
         f"median of {repeat} samples of k steps after {WARMUP} warm-up steps "
@@ -165,7 +176,7 @@ def print_contact(sizes, repeat, log=print, material="elastic"):
     run_contact(PRIME, 1, material)
     # One bed per size, smallest first
     for n in sizes:
-        r = run_contact(n, repeat, material)
+        r = run_contact(n, repeat, material, yardstick=True)
         rows.append(r)
         log(f"{n:>8}{r['elements']:>9}{r['steps']:>4}{1e3 * r['step']:>10.3f}"
             f"{1e3 * r['detection']:>11.3f}{1e3 * r['forces']:>11.3f}{1e3 * r['contact']:>12.3f}"
@@ -177,13 +188,16 @@ def print_contact(sizes, repeat, log=print, material="elastic"):
     # Whole-step time per grain-step, and linearity of the contact time
     for r in rows:
         log(f"step time per grain-step at {r['grains']} grains: "
-            f"{1e6 * r['step'] / r['grains']:.3f} us (elements "
+            f"{1e6 * r['step'] / r['grains']:.3f} us (CPU time {1e6 * r['cpu'] / r['grains']:.3f}"
+            f" us; elements "
             f"{1e6 * r['elements_s'] / r['grains']:.3f}, contact "
             f"{1e6 * r['contact'] / r['grains']:.3f}; set-up {r['setup']:.2f} s); memory "
             f"{r['rss_per_grain'] / 1024:.2f} kB/grain resident after the steps, peak "
             f"{r['peak_per_grain'] / 1024:.2f} kB/grain; the energy-drift check "
             f"{1e6 * r['drift'] / r['grains']:.3f} us/grain ({100 * r['drift'] / r['step']:.1f} % "
             "of a step, guards.energy_steps = 1)")
+    for r in rows:
+        print_pass_yardstick(r["yardstick"], r["grains"], log)
     if len(rows) > 1:
         lo, hi = rows[0], rows[-1]
         ratio = (hi["contact"] / hi["grains"]) / (lo["contact"] / lo["grains"])

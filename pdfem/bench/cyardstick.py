@@ -8,6 +8,9 @@ kernel's argument list, or None when no C compiler is available:
     q4_1pt      pdfem.kernels.element.q4_forces_1pt, elastic materials only
     q4_2x2_cap  pdfem.kernels.element.q4_forces_2x2 with material state (cap, elastic), no
                 thermal coupling
+    contact_pass  pdfem.kernels.contact.contact_pass as a step calls it (key-sorted
+                candidates, the history table, compact rows), convex elements; built with
+                -ffp-contract=off too, so that its results are numba's bits
 """
 
 import ctypes
@@ -21,8 +24,9 @@ from importlib import resources
 import numpy as np
 
 FLAGS = ["-O3", "-march=native", "-shared", "-fPIC"]
-# Libraries linked after the source, per kernel
-LIBS = {"q4_1pt": [], "q4_2x2_cap": ["-lm"]}
+# Libraries linked after the source, and flags beyond FLAGS, per kernel
+LIBS = {"q4_1pt": [], "q4_2x2_cap": ["-lm"], "contact_pass": ["-lm"]}
+EXTRA = {"contact_pass": ["-ffp-contract=off"]}
 
 
 def _library(name="q4_1pt"):
@@ -33,13 +37,14 @@ def _library(name="q4_1pt"):
     src = resources.files("pdfem") / "bench" / "c" / f"{name}.c"
     text = src.read_bytes()
     libs = LIBS[name]
-    tag = hashlib.sha256(text + " ".join(FLAGS + libs).encode()).hexdigest()[:16]
+    flags = FLAGS + EXTRA.get(name, [])
+    tag = hashlib.sha256(text + " ".join(flags + libs).encode()).hexdigest()[:16]
     folder = os.path.join(tempfile.gettempdir(), f"pdfem-c-{os.getuid()}")
     os.makedirs(folder, exist_ok=True)
     lib = os.path.join(folder, f"{name}-{tag}.so")
     if not os.path.exists(lib):
         tmp = lib + f".{os.getpid()}.part"
-        subprocess.run([gcc, *FLAGS, "-o", tmp, str(src), *libs], check=True,
+        subprocess.run([gcc, *flags, "-o", tmp, str(src), *libs], check=True,
                        capture_output=True)
         os.replace(tmp, lib)
     return lib
@@ -98,10 +103,44 @@ def _load_2x2_cap(lib):
     return call
 
 
+def _load_contact_pass(lib):
+    """Callable of the contact pass (production mode: law rows by material pair, the history
+    by merge, compact rows). Returns (rows, guarded, evaluated, unsupported)."""
+    fn = lib.contact_pass_c
+    i64, dbl, ptr = ctypes.c_int64, ctypes.c_double, ctypes.c_void_p
+    fn.argtypes = [ptr] * 10 + [i64] + [ptr] * 4 + [i64, ptr, ptr, i64, dbl, i64, ptr, i64] + \
+        [ptr] * 11
+    fn.restype = i64
+
+    def call(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, wall_p0, wall_n, wall_mu,
+             cand, hkey, hval, dt, bbox, active, keys, elems, nodes, weights, fnod, us_out, res):
+        floats = (x, du, m, elen, law, wall_p0, wall_n, wall_mu, hval, bbox, weights, fnod,
+                  us_out, res)
+        ints = (conn, egid, eloc, cand, hkey, keys, elems, nodes)
+        _check(floats + ints + (ebnd, emat, active), floats)
+        assert all(a.dtype == np.int64 for a in ints) and emat.dtype == np.int32
+        assert ebnd.dtype == np.int8 and active.dtype == np.int8
+        out = (ctypes.c_int64(), ctypes.c_int64(), ctypes.c_int64())
+        n = fn(x.ctypes.data, du.ctypes.data, m.ctypes.data, conn.ctypes.data, ebnd.ctypes.data,
+               egid.ctypes.data, eloc.ctypes.data, elen.ctypes.data, emat.ctypes.data,
+               law.ctypes.data, nmat, wall_p0.ctypes.data, wall_n.ctypes.data,
+               wall_mu.ctypes.data, cand.ctypes.data, cand.shape[0], hkey.ctypes.data,
+               hval.ctypes.data, hkey.shape[0], dt, conn.shape[0], bbox.ctypes.data,
+               active.shape[0], active.ctypes.data, keys.ctypes.data, elems.ctypes.data,
+               nodes.ctypes.data, weights.ctypes.data, fnod.ctypes.data, us_out.ctypes.data,
+               res.ctypes.data, *(ctypes.byref(o) for o in out))
+        return n, out[0].value, out[1].value, out[2].value
+
+    return call
+
+
 def load(name="q4_1pt"):
-    """A callable ``fn(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1, f, ewint, ewp,
-    eth)`` running the C kernel ``name`` (see the module docstring), or None without gcc."""
-    makers = {"q4_1pt": _load_1pt, "q4_2x2_cap": _load_2x2_cap}
+    """A callable running the C kernel ``name`` (see the module docstring), or None without
+    gcc: for the element kernels ``fn(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1,
+    f, ewint, ewp, eth)``, for contact_pass the arguments of a step's pass (_load_contact_pass).
+    """
+    makers = {"q4_1pt": _load_1pt, "q4_2x2_cap": _load_2x2_cap,
+              "contact_pass": _load_contact_pass}
     if name not in makers:
         raise ValueError(f"unknown C yardstick {name!r} (have {', '.join(makers)})")
     path = _library(name)

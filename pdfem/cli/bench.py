@@ -1,10 +1,13 @@
-"""``pdfem bench {elements,contact,parallel,checkpoint,startup,all}``: print performance figures.
+"""``pdfem bench {elements,contact,peers,parallel,checkpoint,startup,all}``: print performance
+figures.
 
 elements: element updates per second of both integration rules, numba kernels vs their
 numpy twins and the 1-point kernel vs its C yardstick (pdfem.bench.elements); with
 --material cap and/or --heat, the cost per element-step of those effects in real solver steps
 (pdfem.bench.effects). contact: whole steps of dense grain beds of several sizes, contact and
-element time, memory per grain (pdfem.bench.contact). parallel: halo and migration cost,
+element time, memory per grain, the contact pass against its C twin (pdfem.bench.contact).
+peers: the 10^4-grain cap bed against a LAMMPS bed of 10^4 frictional discs, when lmp is on
+the PATH (pdfem.bench.peers). parallel: halo and migration cost,
 under mpirun (pdfem.bench.parallel). checkpoint: the time of a checkpoint's write and of a
 restart's set-up, and rank 0's memory during both, on any number of ranks
 (pdfem.bench.checkpoint). startup: seconds to the first step of a fresh process
@@ -47,10 +50,12 @@ def add_parser(sub):
     p = sub.add_parser("bench", help="print performance figures",
                        description=__doc__.split("\n\n")[1])
     what = p.add_subparsers(dest="what", required=True, parser_class=type(p),
-                            metavar="{elements,contact,parallel,checkpoint,startup,all}")
+                            metavar="{elements,contact,peers,parallel,checkpoint,startup,all}")
     # Arguments of each sub-command (all takes the union)
     el = what.add_parser("elements", help="element force kernels: numba vs numpy and C")
     co = what.add_parser("contact", help="whole steps of dense grain beds")
+    pe = what.add_parser("peers", help="the 10^4-grain cap bed against a LAMMPS disc bed (lmp "
+                         "on the PATH)")
     pa = what.add_parser("parallel", help="halo and migration cost (run under mpirun)")
     ck = what.add_parser("checkpoint", help="checkpoint write and restart: time, rank 0's "
                          "memory (any number of ranks)")
@@ -71,10 +76,12 @@ def add_parser(sub):
     pa.add_argument("--json", default=None, help="also write the figures to this JSON file")
     pa.add_argument("--force", action="store_true", help="overwrite an existing JSON file")
     ck.add_argument("--grains", default="100000", help="grains of the bed (default 100000)")
+    pe.add_argument("--grains", default="10000", help="grains of pdfem's bed (default 10000, "
+                    "the comparison's)")
     for q in (su, al):
         q.add_argument("--warm-only", action="store_true", help="skip the cold start (a "
                        "private empty numba cache: every kernel compiled, about 30 s)")
-    for q in (el, co, pa, ck, su, al):
+    for q in (el, co, pe, pa, ck, su, al):
         q.add_argument("--repeat", default="5", help="timed samples; the median is printed "
                        "(default 5)")
     return p
@@ -131,6 +138,10 @@ def run(args):
         from pdfem.bench.contact import print_contact
 
         print_contact(sizes, repeat, log=_log, material=args.material)
+    elif args.what == "peers":
+        from pdfem.bench.peers import print_peers
+
+        print_peers(repeat, log=_log, grains=grains)
     else:
         from pdfem.bench.startup import print_startup
 

@@ -1,11 +1,15 @@
 """Contact between bodies (report sec. 5): the overlap law, found on the cell grid.
 
-Detection has two levels. At every rebuild the cell grid gives candidate grain pairs: grains
-in the same or neighbouring cells whose bounding boxes (inflated by the skin) overlap; no pair
-can come into contact before the next rebuild, since rebuilds happen whenever a node has moved
-half the skin. Every step, the boundary elements of candidate pairs whose boxes overlap are
-clipped against each other (pdfem.kernels.contact). Blocks (global bodies) are checked against
-every owned grain each step; domain walls against every owned boundary element.
+Detection has two levels, both at every rebuild. The cell grid gives candidate grain pairs:
+grains in the same or neighbouring cells whose bounding boxes (inflated by the skin) overlap.
+Their boundary-element pairs whose boxes are within the skin, and the owned grains' boundary
+elements within the skin of a domain wall, are the step's candidates, sorted once by contact
+key. No pair can come into contact before the next rebuild, since rebuilds happen whenever a
+node has moved half the skin. Every step one kernel pass (pdfem.kernels.contact.contact_pass)
+runs down the candidates: it keeps those whose boxes overlap now (or reach behind the wall),
+clips them, evaluates the law and writes the contacts that touch in key order. Blocks (global
+bodies) move freely: they are checked against every owned grain each step, and their
+candidates merged into the list in key order.
 
 Bit-for-bit reproducibility: each pair is evaluated in canonical orientation (lower global key
 first) by every rank that owns one side; forces are added to owned nodes in the order of the
@@ -28,15 +32,20 @@ from pdfem.kernels.contact import (
     C_ACTIVE,
     NNOD,
     NRES,
-    R_DAMP,
     R_DELTA,
     R_DISS,
-    R_ENERGY,
     R_WIDTH,
-    element_pair_forces,
-    element_wall_forces,
+    contact_pass,
 )
-from pdfem.kernels.contact_step import accumulate_sorted, contact_dt_min, entry_dt_min, max_speed
+from pdfem.kernels.contact_keys import merge_candidates
+from pdfem.kernels.contact_step import (
+    accumulate_sorted,
+    contact_bookkeeping,
+    contact_dt_min,
+    entry_dt_min,
+    first_guarded,
+    max_speed,
+)
 from pdfem.kernels.heat import (
     accumulate_element_heat_sorted,
     accumulate_heat_sorted,
@@ -47,7 +56,6 @@ from pdfem.kernels.neighbours import (
     body_boxes,
     grain_pairs,
     key_spans,
-    lookup_sorted,
     pack_keys,
 )
 from pdfem.parallel.exchange import body_centroids
@@ -58,9 +66,35 @@ RCAP = 0.95
 # A step may close a gap by at most this fraction of delta_max (two bodies each moving at the
 # fastest node speed): the overlap law must see a contact before it is deep
 APPROACH = 0.1
+# Element candidates are kept at a rebuild when their boxes are within the skin: a node moves
+# at most half the skin between rebuilds, so boxes that overlap now were within the skin then
+# (this relative slack covers the rounding of that displacement test)
+REACH_SLACK = 1e-6
+# No per-candidate law rows or history (contact_pass: the materials' law, the sorted history)
+NO_ROWS = np.zeros(0, np.int64)
+NO_HISTORY = np.zeros(0)
+# No force array: the pass leaves the forces to _apply (blocks' rows are gathered first)
+NO_FORCES = np.zeros((0, 2))
 # Outward normals of the domain walls (pointing into the domain) and their box coordinate
 WALL_SIDES = {"left": ((1.0, 0.0), 0), "bottom": ((0.0, 1.0), 1), "right": ((-1.0, 0.0), 2),
               "top": ((0.0, -1.0), 3)}
+
+
+def _block_elements(s, g0):
+    """Number of elements of the g0 global bodies (blocks), stored first."""
+    return int(s.estart[g0 - 1] + s.ne[g0 - 1]) if g0 else 0
+
+
+def _sorted_candidates(s, pairs, welems, wids):
+    """Candidates of the contact pass (pdfem.kernels.contact_pass): element pairs (a, b) and
+    element-wall pairs (e, -1 - wall), sorted by global contact key."""
+    cand = np.concatenate([pairs, np.stack([welems, -1 - wids], axis=1)]).astype(np.int64)
+    a, b = cand[:, 0], cand[:, 1]
+    pair = b >= 0
+    bb = np.where(pair, b, 0)
+    keys = np.stack([s.elem_gid[a], s.elem_loc[a], np.where(pair, s.elem_gid[bb], b),
+                     np.where(pair, s.elem_loc[bb], 0)], axis=1)
+    return cand[_lexorder(keys)]
 
 
 def _lexorder(keys):
@@ -120,6 +154,7 @@ class Contact(Effect):
             self.walls.append((p0, np.array(normal), mu))
         self._wall_p0 = np.array([w[0] for w in self.walls]).reshape(-1, 2)
         self._wall_n = np.array([w[1] for w in self.walls]).reshape(-1, 2)
+        self._wall_mu = np.array([w[2] for w in self.walls], float)
         self._wall_out = np.zeros((2, 1024), np.int64)
         self.friction = bool(self.law[:, :, L.P_MU].max() > 0 or any(w[2] > 0 for w in self.walls))
         # Heat across contacts (set by the contact_conductance / friction_heating effects)
@@ -127,6 +162,10 @@ class Contact(Effect):
         self.heat_fraction = 0.0
         self.gpairs = np.zeros((0, 2), np.int64)
         self._out = np.zeros((1024, 2), np.int64)
+        self.cand = np.zeros((0, 2), np.int64)
+        self._rows = 0
+        self._outputs(1024)
+        self._boxes = np.empty((0, 4))
         self._last = None
 
     def setup(self, sim):
@@ -134,7 +173,8 @@ class Contact(Effect):
 
     # ------------------------------------------------------------------ detection
     def after_rebuild(self, sim):
-        """Candidate grain pairs from the cell grid (first level of detection)."""
+        """Candidate grain pairs from the cell grid (first level of detection), then their
+        element pairs and the owned grain elements near a wall, sorted by key (second)."""
         s, g0 = sim.store, sim.nglobal
         n = s.nbody - g0
         cent = np.empty((n, 2))
@@ -148,11 +188,16 @@ class Contact(Effect):
         pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], sim.grid.nx, sim.grid.ny,
                             sim.skin)
         self.gpairs = pairs + g0
+        reach = sim.skin * (1.0 + REACH_SLACK)
+        epairs = self._element_pairs(sim, bbox, self.gpairs, reach)
+        welems, wids = self._wall_elements(sim, bbox, _block_elements(s, g0), s.ne_own, reach)
+        self.cand = _sorted_candidates(s, epairs, welems, wids)
 
-    def _body_pairs(self, sim, boxes):
-        """Grain pairs of the last rebuild, plus owned grains near each block, block pairs."""
+    def _block_pairs(self, sim, boxes):
+        """Owned grains near each block, and the block pairs (blocks move freely: every
+        step)."""
         s, g0 = sim.store, sim.nglobal
-        parts = [self.gpairs]
+        parts = [np.zeros((0, 2), np.int64)]
         own = np.arange(g0, s.nb_own)
         for g in range(g0):
             b = boxes[g]
@@ -163,123 +208,134 @@ class Contact(Effect):
                 parts.append(np.array([[g, h]], np.int64))
         return np.concatenate(parts).astype(np.int64)
 
-    def _element_pairs(self, sim, bbox, bpairs):
-        """Boundary-element pairs of the candidate bodies whose boxes overlap."""
+    def _element_pairs(self, sim, bbox, bpairs, reach):
+        """Boundary-element pairs of the candidate bodies whose boxes are within reach."""
         s = sim.store
         e0, e1 = s.estart, s.estart + s.ne
         while True:
-            n = candidate_pairs(bbox, s.ebnd, s.elem_gid, s.elem_loc, e0, e1, bpairs, 0.0,
+            n = candidate_pairs(bbox, s.ebnd, s.elem_gid, s.elem_loc, e0, e1, bpairs, reach,
                                 self._out)
             if n <= self._out.shape[0]:
                 return self._out[:n].copy()
             self._out = np.zeros((2 * n, 2), np.int64)
 
-    def _wall_elements(self, sim, bbox):
-        """(elements, wall index) of owned boundary elements crossing a wall line."""
+    def _wall_elements(self, sim, bbox, e0, e1, reach):
+        """(elements, wall index) of the boundary elements of [e0, e1) within reach of a
+        wall's half-plane."""
         s = sim.store
         if not self.walls:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         while True:
-            m = wall_crossings(bbox, s.ebnd, s.ne_own, self._wall_p0, self._wall_n,
+            m = wall_crossings(bbox, s.ebnd, e0, e1, self._wall_p0, self._wall_n, reach,
                                self._wall_out[0], self._wall_out[1])
             if m <= self._wall_out.shape[1]:
                 return self._wall_out[0, :m].copy(), self._wall_out[1, :m].copy()
             self._wall_out = np.zeros((2, 2 * m), np.int64)
 
+    def _step_candidates(self, sim):
+        """This step's candidates: those of the last rebuild, merged in key order with the
+        blocks' (element pairs and walls whose boxes overlap now)."""
+        s, g0 = sim.store, sim.nglobal
+        if g0 == 0:
+            return self.cand
+        bbox = np.empty((s.nelem, 4))
+        element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
+        boxes = np.empty((s.nbody, 4))
+        body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
+        pairs = self._element_pairs(sim, bbox, self._block_pairs(sim, boxes), 0.0)
+        welems, wids = self._wall_elements(sim, bbox, 0, _block_elements(s, g0), 0.0)
+        blocks = _sorted_candidates(s, pairs, welems, wids)
+        cand = np.empty((self.cand.shape[0] + blocks.shape[0], 2), np.int64)
+        merge_candidates(self.cand, blocks, s.elem_gid, s.elem_loc, cand)
+        return cand
+
     # ------------------------------------------------------------------ forces
     def contact_forces(self, sim):
         """Evaluate every contact this rank needs and add the forces in key order."""
-        s = sim.store
         with sim.timers.phase("contact_detection"):
-            bbox = np.empty((s.nelem, 4))
-            element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
-            boxes = np.empty((s.nbody, 4))
-            body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
-            pairs = self._element_pairs(sim, bbox, self._body_pairs(sim, boxes))
-            welems, wids = self._wall_elements(sim, bbox)
+            cand = self._step_candidates(sim)
         with sim.timers.phase("contact_forces"):
-            self._evaluate(sim, pairs, welems, wids)
+            self._evaluate(sim, cand)
 
-    def _evaluate(self, sim, pairs, welems, wids):
+    def _outputs(self, rows):
+        """Output arrays of the contact pass with room for rows contacts (kept between steps:
+        no allocation per step)."""
+        if self._rows < rows:
+            self._rows = rows
+            self._buf = (np.empty(rows, np.int8), np.empty((rows, 4), np.int64),
+                         np.empty((rows, 2), np.int64), np.empty((rows, NNOD), np.int64),
+                         np.empty((rows, NNOD)), np.empty((rows, NNOD, 2)), np.empty(rows),
+                         np.empty((rows, NRES)))
+        return self._buf
+
+    def _bbox(self, n):
+        """Scratch for the n elements' boxes (kept between steps)."""
+        if self._boxes.shape[0] != n:
+            self._boxes = np.empty((n, 4))
+        return self._boxes
+
+    def _evaluate(self, sim, cand):
         s = sim.store
-        npair, nwall = pairs.shape[0], welems.shape[0]
-        n = npair + nwall
-        # Global keys: (gid_a, elem_a, gid_b, elem_b); a wall is (gid, elem, -1 - wall, 0)
-        keys = np.empty((n, 4), np.int64)
-        a, b = pairs[:, 0], pairs[:, 1]
-        keys[:npair] = np.stack([s.elem_gid[a], s.elem_loc[a], s.elem_gid[b], s.elem_loc[b]], 1)
-        keys[npair:] = np.stack([s.elem_gid[welems], s.elem_loc[welems], -1 - wids,
-                                 np.zeros(nwall, np.int64)], 1)
-        order = _lexorder(keys)
-        us_in = np.empty(n)
-        lookup_sorted(keys, order, s.hkey, s.hval, us_in)
-        # Law parameters of each contact's material pair (walls: the pair with itself)
-        params = np.empty((n, L.NPAR))
-        params[:npair] = self.law[s.emat[a], s.emat[b]]
-        params[npair:] = self.law[s.emat[welems], s.emat[welems]]
-        for w, (_, _, mu) in enumerate(self.walls):
-            params[npair:][wids == w, L.P_MU] = mu
-        active = np.empty(n, np.int8)
-        nodes = np.empty((n, NNOD), np.int64)
-        weights = np.empty((n, NNOD))
-        fnod = np.empty((n, NNOD, 2))
-        us_out = np.empty(n)
-        res = np.empty((n, NRES))
-        sl = slice(0, npair)
         dt = getattr(sim, "dt", 0.0)
-        bad = element_pair_forces(s.x, sim.du, s.conn, s.ebnd, s.elem_gid, s.elem_loc, s.elen,
-                                  pairs, params[sl], us_in[sl], active[sl], nodes[sl],
-                                  weights[sl], fnod[sl], us_out[sl], res[sl], s.m, dt)
-        sl = slice(npair, n)
-        if nwall:
-            p0, nrm = self._wall_p0[wids], self._wall_n[wids]
-            bad += element_wall_forces(s.x, sim.du, s.conn, s.ebnd, s.elen, welems, p0, nrm,
-                                       params[sl], us_in[sl], active[sl], nodes[sl],
-                                       weights[sl], fnod[sl], us_out[sl], res[sl], s.m, dt)
-        self._check(sim, keys, active, res, bad)
-        self._apply(sim, keys, order, active, nodes, weights, fnod, res, pairs, welems)
-        self._bookkeeping(sim, keys, order, active, us_out, res, pairs, welems)
-        self._last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys}
+        # Without blocks every contact is local and in key order: the pass adds the forces (all
+        # of them, also those whose rows did not fit: a second call only writes the rows)
+        added = sim.nglobal == 0
+        forces = sim.fc if added else NO_FORCES
+        while True:
+            out = self._outputs(self._rows)
+            n, _, nev = contact_pass(s.x, sim.du, s.m, s.conn, s.ebnd, s.elem_gid, s.elem_loc,
+                                       s.elen, s.emat, self.law.reshape(-1, L.NPAR),
+                                       self.law.shape[0], NO_ROWS, self._wall_p0, self._wall_n,
+                                       self._wall_mu, cand, s.hkey, s.hval, NO_HISTORY, False,
+                                       False, dt, self._bbox(s.nelem), forces, s.nn_own,
+                                       *out)
+            if n <= self._rows:
+                break
+            self._outputs(n + n // 4 + 64)
+            forces = NO_FORCES
+        active, keys, elems, nodes, weights, fnod, us_out, res = (o[:n] for o in out)
+        self._check(sim, keys, active, res)
+        self._apply(sim, keys, active, nodes, weights, fnod, res, elems, not added)
+        self._bookkeeping(sim, keys, active, us_out, res, elems)
+        self._last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys,
+                      "candidates": cand.shape[0], "evaluated": nev}
 
-    def _check(self, sim, keys, active, res, bad):
+    def _check(self, sim, keys, active, res):
         """Guards: a degenerate overlap, or a mean overlap delta = area / L (the law's) beyond
-        delta_max."""
-        deep = (active == C_ACTIVE) & (res[:, R_DELTA] > self.delta_max)
-        if bad or deep.any():
-            p = int(np.nonzero((active < 0) | deep)[0][0])
+        delta_max; the first in key order is named."""
+        p = first_guarded(active, res, self.delta_max)
+        if p >= 0:
             k = keys[p]
             what = (f"deeper than contact.delta_max (delta = {res[p, R_DELTA]:.3e} m)"
-                    if deep[p] else "degenerate (one element inside the other)")
+                    if active[p] == C_ACTIVE else "degenerate (one element inside the other)")
             other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
             sim.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
                      f"and {other} is {what}")
 
-    def _apply(self, sim, keys, order, active, nodes, weights, fnod, res, pairs, welems):
-        """Add forces (and contact heat) to owned nodes in key order (order sorts keys);
-        block-side rows are gathered from all ranks."""
+    def _apply(self, sim, keys, active, nodes, weights, fnod, res, elems, forces):
+        """Add forces (unless the pass did: forces False) and contact heat to owned nodes in
+        key order (the rows' order); block-side rows are gathered from all ranks."""
         s = sim.store
         # Heat of each contact on its two sides (this step, over sim.dt), its friction part,
         # and the elements of the two sides (-1: a wall)
         heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and hasattr(sim, "dt")
-        q = elems = None
+        q = None
         if heat:
             q = np.zeros((active.shape[0], 4))
             contact_heat(active, nodes, weights, res, s.T, self.heat_h, self.heat_fraction,
                          sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1], q[:, 2], q[:, 3])
-            elems = np.concatenate([pairs, np.stack([welems, np.full(welems.shape[0], -1)],
-                                                    axis=1)]).astype(np.int64)
-        # No blocks: every contact is local, already sorted
+        order = np.arange(active.shape[0])
+        # No blocks: every contact is local, already in key order
         if sim.nglobal == 0:
-            self._add(sim, order, active, nodes, weights, fnod, q, elems)
+            self._add(sim, order, active, nodes, weights, fnod, q, elems, forces)
             return
-        npair = pairs.shape[0]
         isg = s.isglobal[s.elem_body]
-        mixed = np.zeros(active.shape[0], bool)
-        mixed[:npair] = isg[pairs[:, 0]] != isg[pairs[:, 1]]
+        mixed = (elems[:, 1] >= 0) & (isg[elems[:, 0]] != isg[elems[:, 1]])
         local_nodes = nodes.copy()
         # Canonical orientation puts the grain (lower gid) first: its block side is gathered
         local_nodes[mixed, NNOD // 2:] = -1
         if heat:
+            elems = elems.copy()
             elems[mixed, 1] = -1
         sel = np.nonzero(mixed & (active == C_ACTIVE))[0]
         # Gathered rows carry the four heat columns either way (zero without heat)
@@ -309,33 +365,31 @@ class Contact(Effect):
             e_all = np.concatenate([elems, gel]).astype(np.int64)
         self._add(sim, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all, e_all)
 
-    def _add(self, sim, order, active, nodes, weights, fnod, q, elems):
-        """Forces (and heat, q not None) of the contacts in the given order to owned nodes,
-        and the heat to the owned elements of the two sides (elems) by mechanism."""
+    def _add(self, sim, order, active, nodes, weights, fnod, q, elems, forces=True):
+        """Forces (with forces) and heat (q not None) of the contacts in the given order to
+        owned nodes, and the heat to the owned elements of the two sides (elems) by
+        mechanism."""
         s = sim.store
-        accumulate_sorted(order, active, nodes, fnod, s.nn_own, sim.fc)
+        if forces:
+            accumulate_sorted(order, active, nodes, fnod, s.nn_own, sim.fc)
         if q is not None:
             accumulate_heat_sorted(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own,
                                    sim.heat.src)
             accumulate_element_heat_sorted(order, active, elems, q[:, 0], q[:, 1], q[:, 2],
                                            q[:, 3], s.ne_own, s.eheat)
 
-    def _bookkeeping(self, sim, keys, order, active, us_out, res, pairs, welems):
+    def _bookkeeping(self, sim, keys, active, us_out, res, elems):
         """New history table; contact energy and friction per body of side A (counted once)."""
         s = sim.store
-        on = order[active[order] == C_ACTIVE]
-        s.hkey, s.hval = keys[on], us_out[on]
-        body_a = np.concatenate([s.elem_body[pairs[:, 0]], s.elem_body[welems]])[on]
-        mine = body_a < s.nb_own
-        if sim.comm.rank != 0:
-            mine &= s.isglobal[body_a] == 0
-        # Per-body sums in key order (bincount adds in the order given)
-        rows, bodies = on[mine], body_a[mine]
-        self.energy = np.bincount(bodies, res[rows, R_ENERGY], minlength=s.nbody)
+        self.energy = np.zeros(s.nbody)
+        fric, damp = np.zeros(s.nbody), np.zeros(s.nbody)
+        s.hkey, s.hval = contact_bookkeeping(active, keys, us_out, res, elems, s.elem_body,
+                                             s.isglobal, s.nb_own, sim.comm.rank == 0,
+                                             self.energy, fric, damp)
         if self.friction:
-            s.acc[:, ACC_FRIC] += np.bincount(bodies, res[rows, R_DISS], minlength=s.nbody)
+            s.acc[:, ACC_FRIC] += fric
         if self.zeta_max > 0.0:
-            s.acc[:, ACC_CDAMP] += np.bincount(bodies, res[rows, R_DAMP], minlength=s.nbody)
+            s.acc[:, ACC_CDAMP] += damp
 
     # ------------------------------------------------------------------ step size, energy
     def stable_dt(self, sim):

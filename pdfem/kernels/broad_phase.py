@@ -153,24 +153,24 @@ def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, out)
 
 
 @njit(cache=True)
-def wall_crossings(bbox, ebnd, e1, p0, normal, out_e, out_w):
-    """Boundary elements of [0, e1) whose bbox reaches behind wall w (n.(p - p0) < 0 at some
-    corner), wall by wall then element by element, into out_e / out_w; returns the count
-    (only the first out_e.shape[0] are written: call again with room for all)."""
+def wall_crossings(bbox, ebnd, e0, e1, p0, normal, reach, out_e, out_w):
+    """Boundary elements of [e0, e1) whose bbox reaches closer than ``reach`` to wall w's
+    half-plane, n.(p - p0) < reach at some corner (reach 0: behind the wall), wall by wall then
+    element by element, into out_e / out_w; returns the count (only the first out_e.shape[0]
+    are written: call again with room for all)."""
     m = 0
     for w in range(p0.shape[0]):
         nx = normal[w, 0]
         ny = normal[w, 1]
-        for e in range(e1):
+        for e in range(e0, e1):
             if not _on_boundary(ebnd, e):
                 continue
             # Lowest n.(p - p0) over the box corners
             lo = min(nx * (bbox[e, 0] - p0[w, 0]), nx * (bbox[e, 2] - p0[w, 0])) + \
                 min(ny * (bbox[e, 1] - p0[w, 1]), ny * (bbox[e, 3] - p0[w, 1]))
-            if lo < 0.0:
+            if lo < reach:
                 if m < out_e.shape[0]:
                     out_e[m] = e
                     out_w[m] = w
                 m += 1
     return m
-

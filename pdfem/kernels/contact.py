@@ -51,21 +51,28 @@ Output layout per contact p: active[p] (int8, codes C_*); nodes[p, 0:4] A's node
 B's (-1 for a wall); fnod[p, k] the force on nodes[p, k]; weights[p, k] the weight of node k in
 the contact point (nonzero on the nearest boundary edge of each side: the shear's and the
 contact heat's interpolation); us_out[p] the new shear history; res[p, :] the scalars R_*.
+
+One kernel evaluates contacts: contact_pass, over a list of candidates (element pairs and
+element-wall pairs). A step passes the key-sorted candidates of the last rebuild
+(pdfem.effects.contact) and gets one output row per contact that touches, in key order, so the
+forces are added in that order without a sort; element_pair_forces and element_wall_forces
+pass their own lists and get one row per candidate. The pass is one loop with the per-pair
+geometry in three calls (the clip, the polygon's frame, the nearest edges): numba counts
+references to every array passed through a call, so a pair evaluated through many small
+functions costs several times its arithmetic.
 """
 
 import numpy as np
 from numba import njit
 
-from pdfem.kernels.broad_phase import element_corners
+from pdfem.kernels.broad_phase import element_bboxes
 from pdfem.kernels.contact_frame import (
     NNOD,
     alloc_overlap_work,
-    area_gradient,
-    loaded_mass,
-    nearest_edge,
     overlap_extent,
     pair_overlap,
-    side_sum,
+    polygon_frame,
+    unit_normal,
 )
 from pdfem.kernels.contact_law import (
     P_DMAX,
@@ -80,11 +87,19 @@ from pdfem.kernels.contact_law import (
     shear_update,
 )
 from pdfem.kernels.overlap import (
+    K_P,
+    K_Q,
+    K_X,
+    MAXV,
+    OV_INSIDE,
     OV_NONE,
     OV_OK,
     OV_OVERFLOW,
+    SLIVER,
+    T_KIND,
+    T_SRC,
     alloc_clip_buffers,
-    halfplane_overlap,
+    halfplane_into,
 )
 
 # Columns of res[p, :]
@@ -116,210 +131,538 @@ C_OVERFLOW = -4  # clip buffer overflow (cannot happen for convex quads)
 
 
 @njit(cache=True)
-def _clear(p, us_keep, active, nodes, weights, fnod, us_out, res, code):
-    """Outputs of a contact that applies no force (history kept for guards, reset otherwise)."""
-    active[p] = code
+def _key_less(h0, h1, h2, h3, k0, k1, k2, k3):
+    """(h0, h1, h2, h3) < (k0, k1, k2, k3) lexicographically."""
+    if h0 != k0:
+        return h0 < k0
+    if h1 != k1:
+        return h1 < k1
+    if h2 != k2:
+        return h2 < k2
+    return h3 < k3
+
+
+@njit(cache=True)
+def _clear(r, us_keep, code, active, nodes, weights, fnod, us_out, res):
+    """Row r of a contact that applies no force (history kept for guards, reset otherwise)."""
+    active[r] = code
     for k in range(NNOD):
-        nodes[p, k] = -1
-        weights[p, k] = 0.0
-        fnod[p, k, 0] = 0.0
-        fnod[p, k, 1] = 0.0
-    us_out[p] = us_keep
+        nodes[r, k] = -1
+        weights[r, k] = 0.0
+        fnod[r, k, 0] = 0.0
+        fnod[r, k, 1] = 0.0
+    us_out[r] = us_keep
     for k in range(res.shape[1]):
-        res[p, k] = 0.0
+        res[r, k] = 0.0
 
 
 @njit(cache=True)
-def _law(p, g, gax, gay, area, length, nx, ny, wgt, du, nod, us, params, res, dt, meff):
-    """The contact law of pair p in canonical orientation: overwrites the area gradient g with
-    the nodal forces and writes the law's columns of res. wgt (8,): contact-point weights; du,
-    nod: increments and node ids of g's rows (-1: none); meff: effective mass of the sides.
-    Returns the new shear history."""
-    ks = params[p, P_KS]
-    delta = area / length
-    mt, kt, ed = normal_force(delta, 1.0, params[p, P_KN0], params[p, P_DMAX], params[p, P_RCAP])
-    tn = -mt
-    # Area change in this step (dA = sum g.du) and relative motion of the contact point
-    da = 0.0
-    rux = 0.0
-    ruy = 0.0
-    for r in range(NNOD):
-        nd = nod[r]
-        if nd < 0:
-            continue
-        da += g[r, 0] * du[nd, 0] + g[r, 1] * du[nd, 1]
-        # B's part minus A's part of the contact point's increment
-        sg = 1.0 if r >= 4 else -1.0
-        rux += sg * wgt[r] * du[nd, 0]
-        ruy += sg * wgt[r] * du[nd, 1]
-    # Normal damping: a dashpot on the area rate, no tension in total
-    t = tn
-    if dt > 0.0:
-        t = damped_traction(tn, kt, da / dt, meff, length, np.sqrt(gax * gax + gay * gay),
-                            params[p, P_ZETA])
-    # Normal force on A along n, and the shear of the tangential increment
-    fn = -t * max(gax * nx + gay * ny, 0.0)
-    tx = -ny
-    ty = nx
-    us_new, fs, diss = shear_update(us, rux * tx + ruy * ty, length, ks, params[p, P_MU], fn)
-    # Nodal forces: -t dA/dx, plus the shear at the contact point (+ on A, - on B)
-    for r in range(NNOD):
-        sgs = fs if r < 4 else -fs
-        g[r, 0] = -t * g[r, 0] + sgs * wgt[r] * tx
-        g[r, 1] = -t * g[r, 1] + sgs * wgt[r] * ty
-    res[p, R_FN] = fn
-    res[p, R_FS] = fs
-    res[p, R_ENERGY] = length * ed + 0.5 * ks * length * us_new * us_new
-    res[p, R_DISS] = diss
-    res[p, R_STIFF] = kt
-    res[p, R_DELTA] = delta
-    res[p, R_DAMP] = (t - tn) * da
-    res[p, R_LEN] = length
-    res[p, R_KSL] = ks * length
-    res[p, R_MEFF] = meff
-    res[p, R_AREA] = area
-    return us_new
-
-
-@njit(cache=True)
-def _store(p, g, nod, wgt, flip, width, nx, ny, cx, cy, active, nodes, weights, fnod, res):
-    """Outputs of active pair p in the caller's order (A's nodes first; flip: the caller's A is
-    our B) and the frame columns of res."""
-    j = 4 if flip else 0
-    sg = -1.0 if flip else 1.0
-    for r in range(NNOD):
-        q = (r + j) % NNOD
-        nodes[p, q] = nod[r]
-        weights[p, q] = wgt[r]
-        fnod[p, q, 0] = g[r, 0]
-        fnod[p, q, 1] = g[r, 1]
-    active[p] = C_ACTIVE
-    res[p, R_WIDTH] = width
-    res[p, R_NX] = sg * nx
-    res[p, R_NY] = sg * ny
-    res[p, R_CX] = cx
-    res[p, R_CY] = cy
-
-
-@njit(cache=True)
-def element_pair_forces(
-    x, du, conn, ebnd, egid, eloc, elen, pairs, params, us_in, active, nodes, weights, fnod,
-    us_out, res, m, dt
-):
-    """Contact forces of the element pairs pairs (np, 2) (elements of different bodies).
+def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, wall_p0, wall_n,
+                 wall_mu, cand, hkey, hval, us_in, dense, general, dt, bbox, fc, n_owned, active,
+                 keys, elems, nodes, weights, fnod, us_out, res):
+    """Evaluate the candidate contacts cand (nc, 2): element pairs (a, b) of different bodies and
+    element-wall pairs (e, -1 - w).
 
     x, du (nn, 2): positions and displacement increments of the step (du / dt is the velocity
     the normal damping sees; dt = 0: none); m (nn,) lumped masses; conn (ne, 4) int64 CCW;
     ebnd (ne, 4) int8 boundary-edge flags; egid, eloc (ne,) int64 global element key; elen
-    (ne,) contact lengths; params (np, NPAR) law parameters (contact_law.P_*); us_in (np,) shear
-    history. Outputs (module docstring): active (np,), nodes (np, 8), weights (np, 8), fnod
-    (np, 8, 2), us_out (np,), res (np, NRES). Returns the number of guarded contacts.
+    (ne,) contact lengths. The law of a candidate is the row law[lrow[c]] of law (nrow, NPAR)
+    (contact_law.P_*), or with lrow empty the row emat[a] * nmat + emat[b] of the material
+    pair (emat (ne,) element materials; a wall: the element's material with itself); a wall's
+    friction is wall_mu[w]. Wall w is the half-plane {p : n.(p - p0) < 0}, p0 = wall_p0[w], n =
+    wall_n[w] its unit normal out of the wall into the domain. The shear history is us_in[c],
+    or with us_in empty the value of the candidate's key in the sorted table hkey (nh, 4),
+    hval (nh,) (0 if absent; the candidates must then be sorted by key: a merge).
+
+    A candidate is evaluated when the step's exact test of the broad phase passes (the two
+    elements' boxes overlap; the element's box reaches behind the wall); bbox (ne, 4) is
+    scratch for the boxes.
+
+    Outputs (module docstring, plus keys (4,) the global contact key, a wall's (gid, elem,
+    -1 - w, 0), and elems the two elements, -1 for a wall): with dense, row c for candidate c
+    (C_NONE rows cleared); otherwise one row per contact that touches or is guarded, in
+    candidate order, where the arrays' last row is scratch: contacts that do not fit land
+    there, and the caller calls again with room for all. With fc (nn, 2) not empty, each
+    contact's nodal forces are added to fc at its owned nodes (< n_owned) as its row is
+    written: contact_step.accumulate_sorted in row order, without reading the rows again (every
+    contact's, also those that land in the scratch row). general: every pair through the clip
+    library (contact_frame.pair_overlap), the convex ones too, which the pass otherwise
+    evaluates in its own loop with the same operations (the reference the tests compare it
+    with). Returns (rows written or needed, guarded contacts, candidates evaluated).
     """
-    buf = alloc_clip_buffers()
-    buf2 = alloc_clip_buffers()
-    work = alloc_overlap_work()
+    px, py, pt = alloc_clip_buffers()
+    q4, tri, tmap = alloc_overlap_work()
     xa = np.empty((4, 2))
     xb = np.empty((4, 2))
     g = np.empty((NNOD, 2))
-    acc = np.empty(4)
     wgt = np.empty(NNOD)
     nod = np.empty(NNOD, np.int64)
+    last = active.shape[0] - 1
+    nh = hkey.shape[0]
+    by_row = lrow.shape[0] > 0
+    add = fc.shape[0] > 0
+    lookup = us_in.shape[0] == 0
+    q = 0
+    h = 0
     nbad = 0
-    for p in range(pairs.shape[0]):
-        # Canonical orientation: A is the element of lower global key
-        a = pairs[p, 0]
-        b = pairs[p, 1]
-        flip = egid[a] > egid[b] or (egid[a] == egid[b] and eloc[a] > eloc[b])
+    nev = 0
+    held = -1
+    # Every element's box (broad_phase.element_bboxes: the candidates' test)
+    element_bboxes(x, conn, 0, conn.shape[0], bbox)
+    for c in range(cand.shape[0]):
+        a = cand[c, 0]
+        b = cand[c, 1]
+        wall = b < 0
+        w = -1 - b
+        wnx = 0.0
+        wny = 0.0
+        # Canonical orientation: A is the element of lower global key (outputs: the caller's)
+        flip = not wall and (egid[a] > egid[b] or (egid[a] == egid[b] and eloc[a] > eloc[b]))
         if flip:
             a, b = b, a
-        element_corners(x, conn, a, xa)
-        element_corners(x, conn, b, xb)
-        st, area, cx, cy, nx, ny, width = pair_overlap(xa, xb, ebnd, a, b, buf, buf2, work, g,
-                                                       acc)
-        if st == OV_NONE:
-            _clear(p, 0.0, active, nodes, weights, fnod, us_out, res, C_NONE)
+        # The broad phase's exact test of this step, on the elements' boxes
+        if wall:
+            wnx = wall_n[w, 0]
+            wny = wall_n[w, 1]
+            lo = min(wnx * (bbox[a, 0] - wall_p0[w, 0]), wnx * (bbox[a, 2] - wall_p0[w, 0])) + \
+                min(wny * (bbox[a, 1] - wall_p0[w, 1]), wny * (bbox[a, 3] - wall_p0[w, 1]))
+            near = lo < 0.0
+        else:
+            near = (bbox[a, 0] - bbox[b, 2] <= 0.0 and bbox[b, 0] - bbox[a, 2] <= 0.0
+                    and bbox[a, 1] - bbox[b, 3] <= 0.0 and bbox[b, 1] - bbox[a, 3] <= 0.0)
+        r = c if dense else min(q, last)
+        if not near:
+            if dense:
+                _clear(r, 0.0, C_NONE, active, nodes, weights, fnod, us_out, res)
             continue
+        nev += 1
+        # Corners of the two elements (A's kept while consecutive candidates share it)
+        if a != held:
+            for k in range(4):
+                xa[k, 0] = x[conn[a, k], 0]
+                xa[k, 1] = x[conn[a, k], 1]
+            held = a
+        if not wall:
+            for k in range(4):
+                xb[k, 0] = x[conn[b, k], 0]
+                xb[k, 1] = x[conn[b, k], 1]
+        # Overlap, area gradient g and contact frame (n from A into B, width, centroid c)
+        width = 0.0
+        if wall:
+            st, area, cx, cy, _, _, _, _, kw = halfplane_into(xa, wall_p0[w, 0], wall_p0[w, 1],
+                                                              wnx, wny, px, py, pt)
+            nx = -wnx
+            ny = -wny
+            length = elen[a]
+            if st == OV_OK:
+                for k in range(NNOD):
+                    g[k, 0] = 0.0
+                    g[k, 1] = 0.0
+                polygon_frame(px, py, pt, 0, kw, q4, xa, xa, False, ebnd, a, 0, g, 0.0, 0.0,
+                              0.0, 0.0)
+                lo, hi = overlap_extent(px, py, 0, kw, -ny, nx, px[0, 0], py[0, 0], 0.0, 0.0)
+                width = hi - lo
+        else:
+            length = min(elen[a], elen[b])
+            # Is B strictly convex, every corner turning left? (contact_frame.is_convex)
+            convex = True
+            for k in range(4):
+                k1 = k + 1 if k + 1 < 4 else 0
+                k2 = k1 + 1 if k1 + 1 < 4 else 0
+                cr = ((xb[k1, 0] - xb[k, 0]) * (xb[k2, 1] - xb[k1, 1])
+                      - (xb[k1, 1] - xb[k, 1]) * (xb[k2, 0] - xb[k1, 0]))
+                if not cr > 0.0:
+                    convex = False
+                    break
+            if general or not convex:
+                st, area, cx, cy, nx, ny, width = pair_overlap(xa, xb, ebnd, a, b, px, py, pt,
+                                                               q4, tri, tmap, g)
+            else:
+                st, area, cx, cy, nx, ny, width = OV_OK, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+                # The convex case of contact_frame.pair_overlap written out, operation for
+                # operation (no array passes through a call). Early out: A wholly outside an
+                # edge line of B (overlap.outside_edge)
+                for j in range(4):
+                    j1 = (j + 1) % 4
+                    lx = xb[j1, 1] - xb[j, 1]
+                    ly = xb[j, 0] - xb[j1, 0]
+                    out = True
+                    for i in range(4):
+                        if lx * (xa[i, 0] - xb[j, 0]) + ly * (xa[i, 1] - xb[j, 1]) <= 0.0:
+                            out = False
+                            break
+                    if out:
+                        st = OV_NONE
+                        break
+                kc = 4
+                if st == OV_OK:
+                    # A clipped by B's four edge lines, slots 0 and 1 (overlap.clip_into; of the
+                    # tags, only the kind and the source edge, the two read here)
+                    for i in range(4):
+                        px[0, i] = xa[i, 0]
+                        py[0, i] = xa[i, 1]
+                        pt[0, i, T_KIND] = K_P
+                        pt[0, i, T_SRC] = i
+                    sl = 0
+                    for j in range(4):
+                        j1 = j + 1 if j + 1 < 4 else 0
+                        lx = xb[j1, 1] - xb[j, 1]
+                        ly = xb[j, 0] - xb[j1, 0]
+                        x0 = xb[j, 0]
+                        y0 = xb[j, 1]
+                        d = 1 - sl
+                        # One Sutherland-Hodgman step (overlap.clip_halfplane)
+                        kn = 0
+                        js = kc - 1
+                        ss = lx * (px[sl, js] - x0) + ly * (py[sl, js] - y0)
+                        for je in range(kc):
+                            se = lx * (px[sl, je] - x0) + ly * (py[sl, je] - y0)
+                            src = pt[sl, js, T_SRC]
+                            kind = K_X if src >= 0 else K_Q
+                            if se <= 0.0:
+                                if ss > 0.0:
+                                    if kn >= MAXV:
+                                        kn = -1
+                                        break
+                                    t = ss / (ss - se)
+                                    px[d, kn] = px[sl, js] + t * (px[sl, je] - px[sl, js])
+                                    py[d, kn] = py[sl, js] + t * (py[sl, je] - py[sl, js])
+                                    pt[d, kn, T_KIND] = kind
+                                    pt[d, kn, T_SRC] = src
+                                    kn += 1
+                                if kn >= MAXV:
+                                    kn = -1
+                                    break
+                                px[d, kn] = px[sl, je]
+                                py[d, kn] = py[sl, je]
+                                pt[d, kn, T_KIND] = pt[sl, je, T_KIND]
+                                pt[d, kn, T_SRC] = pt[sl, je, T_SRC]
+                                kn += 1
+                            elif ss <= 0.0:
+                                if kn >= MAXV:
+                                    kn = -1
+                                    break
+                                t = ss / (ss - se)
+                                px[d, kn] = px[sl, js] + t * (px[sl, je] - px[sl, js])
+                                py[d, kn] = py[sl, js] + t * (py[sl, je] - py[sl, js])
+                                pt[d, kn, T_KIND] = kind
+                                pt[d, kn, T_SRC] = -1 - j
+                                kn += 1
+                            js = je
+                            ss = se
+                        kc = kn
+                        sl = d
+                        if kc <= 0:
+                            break
+                    if kc < 0:
+                        st = OV_OVERFLOW
+                    else:
+                        # Area and centroid, fanned from vertex 0 (overlap.polygon_area_centroid)
+                        a2 = 0.0
+                        sx = 0.0
+                        sy = 0.0
+                        for i in range(1, kc - 1):
+                            ux = px[0, i] - px[0, 0]
+                            uy = py[0, i] - py[0, 0]
+                            vx = px[0, i + 1] - px[0, 0]
+                            vy = py[0, i + 1] - py[0, 0]
+                            cr = ux * vy - uy * vx
+                            a2 += cr
+                            sx += cr * (ux + vx)
+                            sy += cr * (uy + vy)
+                        if kc >= 3 and a2 != 0.0:
+                            area = 0.5 * a2
+                            cx = px[0, 0] + sx / (3.0 * a2)
+                            cy = py[0, 0] + sy / (3.0 * a2)
+                        # A rounding-level sliver is no contact (overlap.bbox_scale2)
+                        ex = max(xa[0, 0], xa[1, 0], xa[2, 0], xa[3, 0]) - \
+                            min(xa[0, 0], xa[1, 0], xa[2, 0], xa[3, 0])
+                        ey = max(xa[0, 1], xa[1, 1], xa[2, 1], xa[3, 1]) - \
+                            min(xa[0, 1], xa[1, 1], xa[2, 1], xa[3, 1])
+                        ee = max(ex, ey)
+                        if area <= SLIVER * (ee * ee):
+                            st = OV_NONE
+                        else:
+                            # Two crossings of the boundaries at different points, or one
+                            # element inside the other (overlap._distinct_crossings)
+                            first = -1
+                            two = False
+                            for i in range(kc):
+                                if pt[0, i, T_KIND] != K_X:
+                                    continue
+                                if first < 0:
+                                    first = i
+                                elif px[0, i] != px[0, first] or py[0, i] != py[0, first]:
+                                    two = True
+                                    break
+                            if not two:
+                                st = OV_INSIDE
+                if st == OV_OK:
+                    # Area gradient and normal sums (contact_frame.polygon_frame, B's edge j
+                    # the clip line j)
+                    for k in range(NNOD):
+                        g[k, 0] = 0.0
+                        g[k, 1] = 0.0
+                    n0 = 0.0
+                    n1 = 0.0
+                    s0 = 0.0
+                    s1 = 0.0
+                    for i in range(kc):
+                        i1 = i + 1 if i + 1 < kc else 0
+                        src = pt[0, i, T_SRC]
+                        ex = py[0, i1] - py[0, i]
+                        ey = px[0, i] - px[0, i1]
+                        mx = 0.5 * (px[0, i] + px[0, i1])
+                        my = 0.5 * (py[0, i] + py[0, i1])
+                        if src >= 0:
+                            s0 += ex
+                            s1 += ey
+                            if ebnd[a, src] != 0:
+                                n0 += ex
+                                n1 += ey
+                            j = src
+                            j1 = j + 1 if j + 1 < 4 else 0
+                            dx = xa[j1, 0] - xa[j, 0]
+                            dy = xa[j1, 1] - xa[j, 1]
+                            f = ((mx - xa[j, 0]) * dx + (my - xa[j, 1]) * dy) / (dx * dx + dy * dy)
+                            r0 = j
+                            r1 = j1
+                        else:
+                            j = -1 - src
+                            if ebnd[b, j] != 0:
+                                n0 -= ex
+                                n1 -= ey
+                            j1 = j + 1 if j + 1 < 4 else 0
+                            dx = xb[j1, 0] - xb[j, 0]
+                            dy = xb[j1, 1] - xb[j, 1]
+                            f = ((mx - xb[j, 0]) * dx + (my - xb[j, 1]) * dy) / (dx * dx + dy * dy)
+                            r0 = 4 + j
+                            r1 = 4 + j1
+                        f = min(max(f, 0.0), 1.0)
+                        g[r0, 0] += (1.0 - f) * ex
+                        g[r0, 1] += (1.0 - f) * ey
+                        g[r1, 0] += f * ex
+                        g[r1, 1] += f * ey
+                    nx, ny = unit_normal(n0, n1, s0, s1)
+                    # Width: the extent along the tangent (contact_frame.overlap_extent)
+                    lo = 0.0
+                    hi = 0.0
+                    for i in range(kc):
+                        f = (px[0, i] - px[0, 0]) * -ny + (py[0, i] - py[0, 0]) * nx
+                        lo = min(lo, f)
+                        hi = max(hi, f)
+                    width = hi - lo
+        if st == OV_NONE:
+            if dense:
+                _clear(r, 0.0, C_NONE, active, nodes, weights, fnod, us_out, res)
+            continue
+        # The global key (the caller's order), and the shear history (looked up only for the
+        # pairs that touch: the merge's cursor moves forward all the same)
+        ca = cand[c, 0]
+        key0 = egid[ca]
+        key1 = eloc[ca]
+        key2 = b if wall else egid[cand[c, 1]]
+        key3 = 0 if wall else eloc[cand[c, 1]]
+        if lookup:
+            while h < nh and _key_less(hkey[h, 0], hkey[h, 1], hkey[h, 2], hkey[h, 3], key0,
+                                       key1, key2, key3):
+                h += 1
+            us = hval[h] if h < nh and not _key_less(key0, key1, key2, key3, hkey[h, 0],
+                                                     hkey[h, 1], hkey[h, 2], hkey[h, 3]) else 0.0
+        else:
+            us = us_in[c]
+        # The boundary edge of each side nearest to the contact point, and the parameter of
+        # the point's projection on it (contact_frame.nearest_edge); the guards
+        ka = -1
+        sa = 0.0
+        kb = -1
+        sb = 0.0
         if st != OV_OK:
             code = C_OVERFLOW if st == OV_OVERFLOW else C_INSIDE
-            _clear(p, us_in[p], active, nodes, weights, fnod, us_out, res, code)
+        else:
+            best = np.inf
+            for k in range(4):
+                if ebnd[a, k] == 0:
+                    continue
+                k1 = (k + 1) % 4
+                dx = xa[k1, 0] - xa[k, 0]
+                dy = xa[k1, 1] - xa[k, 1]
+                f = ((cx - xa[k, 0]) * dx + (cy - xa[k, 1]) * dy) / (dx * dx + dy * dy)
+                f = min(max(f, 0.0), 1.0)
+                rx = xa[k, 0] + f * dx - cx
+                ry = xa[k, 1] + f * dy - cy
+                d2 = rx * rx + ry * ry
+                if d2 < best:
+                    best = d2
+                    ka = k
+                    sa = f
+            best = np.inf
+            for k in range(0 if wall else 4):
+                if ebnd[b, k] == 0:
+                    continue
+                k1 = (k + 1) % 4
+                dx = xb[k1, 0] - xb[k, 0]
+                dy = xb[k1, 1] - xb[k, 1]
+                f = ((cx - xb[k, 0]) * dx + (cy - xb[k, 1]) * dy) / (dx * dx + dy * dy)
+                f = min(max(f, 0.0), 1.0)
+                rx = xb[k, 0] + f * dx - cx
+                ry = xb[k, 1] + f * dy - cy
+                d2 = rx * rx + ry * ry
+                if d2 < best:
+                    best = d2
+                    kb = k
+                    sb = f
+            if wall:
+                code = C_NOEDGE if ka < 0 or not length > 0.0 else C_ACTIVE
+            else:
+                code = C_ACTIVE
+                if nx == 0.0 and ny == 0.0 or ka < 0 or kb < 0 or not length > 0.0:
+                    code = C_NONORMAL if ka >= 0 and kb >= 0 and length > 0.0 else C_NOEDGE
+        keys[r, 0] = key0
+        keys[r, 1] = key1
+        keys[r, 2] = key2
+        keys[r, 3] = key3
+        elems[r, 0] = ca
+        elems[r, 1] = -1 if wall else cand[c, 1]
+        q += 1
+        if code != C_ACTIVE:
+            # A guard: no force, the history kept
             nbad += 1
+            _clear(r, us, code, active, nodes, weights, fnod, us_out, res)
             continue
-        # The boundary edge of each side nearest to the contact point
-        ka, sa = nearest_edge(xa, ebnd, a, cx, cy)
-        kb, sb = nearest_edge(xb, ebnd, b, cx, cy)
-        length = min(elen[a], elen[b])
-        if nx == 0.0 and ny == 0.0 or ka < 0 or kb < 0 or not length > 0.0:
-            code = C_NONORMAL if ka >= 0 and kb >= 0 and length > 0.0 else C_NOEDGE
-            _clear(p, us_in[p], active, nodes, weights, fnod, us_out, res, code)
-            nbad += 1
-            continue
-        for r in range(4):
-            nod[r] = conn[a, r]
-            nod[4 + r] = conn[b, r]
-            wgt[r] = 0.0
-            wgt[4 + r] = 0.0
+        # Nodes and contact-point weights of the two sides (a wall has none)
+        for k in range(4):
+            nod[k] = conn[a, k]
+            nod[4 + k] = -1 if wall else conn[b, k]
+            wgt[k] = 0.0
+            wgt[4 + k] = 0.0
         wgt[ka] = 1.0 - sa
         wgt[(ka + 1) % 4] = sa
-        wgt[4 + kb] = 1.0 - sb
-        wgt[4 + (kb + 1) % 4] = sb
-        gax, gay = side_sum(g, 0)
-        meff = effective_mass(loaded_mass(g, nod, m, 0), loaded_mass(g, nod, m, 4))
-        us_out[p] = _law(p, g, gax, gay, area, length, nx, ny, wgt, du, nod, us_in[p], params,
-                         res, dt, meff)
-        _store(p, g, nod, wgt, flip, width, nx, ny, cx, cy, active, nodes, weights, fnod, res)
-    return nbad
+        if not wall:
+            wgt[4 + kb] = 1.0 - sb
+            wgt[4 + (kb + 1) % 4] = sb
+        # dA for a translation of A, and the lightest loaded node of each side
+        gax = 0.0
+        gay = 0.0
+        ma = np.inf
+        mb = np.inf
+        for k in range(4):
+            gax += g[k, 0]
+            gay += g[k, 1]
+            if g[k, 0] != 0.0 or g[k, 1] != 0.0:
+                ma = min(ma, m[nod[k]])
+            if nod[4 + k] >= 0 and (g[4 + k, 0] != 0.0 or g[4 + k, 1] != 0.0):
+                mb = min(mb, m[nod[4 + k]])
+        meff = ma if wall else effective_mass(ma, mb)
+        # The law of the pair (contact_law): parameters, normal traction and its tangent
+        lr = (lrow[c] if by_row else emat[a] * nmat + (emat[a] if wall else emat[b]))
+        kn0 = law[lr, P_KN0]
+        ks = law[lr, P_KS]
+        mu = wall_mu[w] if wall else law[lr, P_MU]
+        delta = area / length
+        mt, kt, ed = normal_force(delta, 1.0, kn0, law[lr, P_DMAX], law[lr, P_RCAP])
+        tn = -mt
+        # Area change in this step (dA = sum g.du) and relative motion of the contact point
+        da = 0.0
+        rux = 0.0
+        ruy = 0.0
+        for k in range(NNOD):
+            nd = nod[k]
+            if nd < 0:
+                continue
+            da += g[k, 0] * du[nd, 0] + g[k, 1] * du[nd, 1]
+            # B's part minus A's part of the contact point's increment
+            sg = 1.0 if k >= 4 else -1.0
+            rux += sg * wgt[k] * du[nd, 0]
+            ruy += sg * wgt[k] * du[nd, 1]
+        # Normal damping: a dashpot on the area rate, no tension in total
+        t = tn
+        if dt > 0.0:
+            t = damped_traction(tn, kt, da / dt, meff, length, np.sqrt(gax * gax + gay * gay),
+                                law[lr, P_ZETA])
+        # Normal force on A along n, and the shear of the tangential increment
+        fn = -t * max(gax * nx + gay * ny, 0.0)
+        tx = -ny
+        ty = nx
+        us_new, fs, diss = shear_update(us, rux * tx + ruy * ty, length, ks, mu, fn)
+        # Nodal forces -t dA/dx plus the shear at the contact point (+ on A, - on B), in the
+        # caller's order (flip: the caller's A is our B)
+        j = 4 if flip else 0
+        for k in range(NNOD):
+            sgs = fs if k < 4 else -fs
+            o = (k + j) % NNOD
+            nodes[r, o] = nod[k]
+            weights[r, o] = wgt[k]
+            fnod[r, o, 0] = -t * g[k, 0] + sgs * wgt[k] * tx
+            fnod[r, o, 1] = -t * g[k, 1] + sgs * wgt[k] * ty
+        sgn = -1.0 if flip else 1.0
+        active[r] = C_ACTIVE
+        us_out[r] = us_new
+        res[r, R_FN] = fn
+        res[r, R_FS] = fs
+        res[r, R_ENERGY] = length * ed + 0.5 * ks * length * us_new * us_new
+        res[r, R_DISS] = diss
+        res[r, R_STIFF] = kt
+        res[r, R_DELTA] = delta
+        res[r, R_WIDTH] = width
+        res[r, R_NX] = sgn * nx
+        res[r, R_NY] = sgn * ny
+        res[r, R_CX] = cx
+        res[r, R_CY] = cy
+        res[r, R_DAMP] = (t - tn) * da
+        res[r, R_LEN] = length
+        res[r, R_KSL] = ks * length
+        res[r, R_MEFF] = meff
+        res[r, R_AREA] = area
+        if add:
+            for o in range(NNOD):
+                nd = nodes[r, o]
+                if nd < 0 or nd >= n_owned:
+                    continue
+                fc[nd, 0] += fnod[r, o, 0]
+                fc[nd, 1] += fnod[r, o, 1]
+    return q, nbad, nev
 
 
-@njit(cache=True)
-def element_wall_forces(
-    x, du, conn, ebnd, elen, elems, wall_p0, wall_n, params, us_in, active, nodes, weights, fnod,
-    us_out, res, m, dt
-):
-    """Contact forces between elements elems (nw,) and rigid walls (increment zero).
+def _dense_rows(n):
+    """The key and element outputs contact_pass writes besides the caller's (dense: unused)."""
+    return np.empty((n, 4), np.int64), np.empty((n, 2), np.int64)
 
-    Wall i is the half-plane {p : n.(p - p0) < 0} with p0 = wall_p0[i] and n = wall_n[i] the unit
-    normal out of the wall into the domain. The normal from the element (A) into the wall (B) is
-    -n; the pair's length is the element's elen. Outputs as element_pair_forces with nodes[i,
-    4:] = -1 and no force or weight there. Returns the number of guarded contacts.
+
+def element_pair_forces(x, du, conn, ebnd, egid, eloc, elen, pairs, params, us_in, active, nodes,
+                        weights, fnod, us_out, res, m, dt):
+    """Contact forces of the element pairs pairs (np, 2) (elements of different bodies), one
+    output row per pair (contact_pass; C_NONE where they do not touch).
+
+    params (np, NPAR) law parameters (contact_law.P_*); us_in (np,) shear history; the other
+    inputs and the outputs as contact_pass. Returns the number of guarded contacts.
     """
-    ox, oy, otag, wx, wy, wtag = alloc_clip_buffers()
-    xa = np.empty((4, 2))
-    xw = np.empty((0, 2))
-    qw = np.zeros(1, np.int64)
-    g = np.empty((NNOD, 2))
-    lohi = np.empty(2)
-    wgt = np.zeros(NNOD)
-    nod = np.full(NNOD, -1, np.int64)
-    nbad = 0
-    for p in range(elems.shape[0]):
-        e = elems[p]
-        element_corners(x, conn, e, xa)
-        st, area, cx, cy, _, _, _, _, k = halfplane_overlap(
-            xa, wall_p0[p], wall_n[p], ox, oy, otag, wx, wy, wtag
-        )
-        if st == OV_NONE:
-            _clear(p, 0.0, active, nodes, weights, fnod, us_out, res, C_NONE)
-            continue
-        ke, se = nearest_edge(xa, ebnd, e, cx, cy)
-        if st != OV_OK or ke < 0 or not elen[e] > 0.0:
-            code = C_NOEDGE if st == OV_OK else (C_OVERFLOW if st == OV_OVERFLOW else C_INSIDE)
-            _clear(p, us_in[p], active, nodes, weights, fnod, us_out, res, code)
-            nbad += 1
-            continue
-        nx = -wall_n[p, 0]
-        ny = -wall_n[p, 1]
-        for r in range(4):
-            nod[r] = conn[e, r]
-            wgt[r] = 0.0
-        wgt[ke] = 1.0 - se
-        wgt[(ke + 1) % 4] = se
-        g[:, :] = 0.0
-        area_gradient(ox, oy, otag, k, xa, xw, qw, g)
-        gax, gay = side_sum(g, 0)
-        us_out[p] = _law(p, g, gax, gay, area, elen[e], nx, ny, wgt, du, nod, us_in[p], params,
-                         res, dt, loaded_mass(g, nod, m, 0))
-        lohi[:] = 0.0
-        overlap_extent(ox, oy, k, -ny, nx, ox[0], oy[0], lohi)
-        _store(p, g, nod, wgt, False, lohi[1] - lohi[0], nx, ny, cx, cy, active, nodes, weights,
-               fnod, res)
-    return nbad
+    n = pairs.shape[0]
+    keys, elems = _dense_rows(n)
+    none = np.zeros((0, 2))
+    return contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, np.zeros(0, np.int64), params, 0,
+                        np.arange(n), none, none, np.zeros(0), pairs.astype(np.int64),
+                        np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,
+                        np.empty((conn.shape[0], 4)), np.zeros((0, 2)), 0, active, keys,
+                        elems, nodes, weights, fnod, us_out, res)[1]
+
+
+def element_wall_forces(x, du, conn, ebnd, elen, elems, wall_p0, wall_n, params, us_in, active,
+                        nodes, weights, fnod, us_out, res, m, dt):
+    """Contact forces between elements elems (nw,) and rigid walls (increment zero), one output
+    row per element (contact_pass): element i against the wall {p : n.(p - p0) < 0} with p0 =
+    wall_p0[i] and n = wall_n[i] the unit normal out of the wall into the domain, the law
+    params[i] (its friction the wall's). The normal from the element (A) into the wall (B) is
+    -n; the pair's length is the element's elen; nodes[i, 4:] = -1, with no force or weight.
+    Returns the number of guarded contacts.
+    """
+    n = elems.shape[0]
+    keys, rows = _dense_rows(n)
+    cand = np.stack([elems.astype(np.int64), -1 - np.arange(n)], axis=1)
+    ids = np.zeros(conn.shape[0], np.int64)
+    return contact_pass(x, du, m, conn, ebnd, ids, ids, elen, ids, params, 0, np.arange(n),
+                        np.ascontiguousarray(wall_p0, float), np.ascontiguousarray(wall_n, float),
+                        np.ascontiguousarray(params[:, P_MU]), cand,
+                        np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,
+                        np.empty((conn.shape[0], 4)), np.zeros((0, 2)), 0, active, keys,
+                        rows, nodes, weights, fnod, us_out, res)[1]

@@ -2,12 +2,12 @@
 with respect to the nodes of the two elements, the contact normal, the overlap's width along the
 tangent, the boundary edge nearest to the contact point, the lightest node the area gradient
 loads, and the convexity test and split that keep the clip polygon convex. The polygon is the
-tagged output of pdfem.kernels.overlap (A is the clip subject, T_SRC >= 0 edges lie on A, T_SRC
-< 0 on B).
+tagged output of pdfem.kernels.overlap in a slot of the clip buffers (A is the clip subject,
+T_SRC >= 0 edges lie on A, T_SRC < 0 on B).
 
-pair_overlap and the small helpers it calls on every element pair are inlined into the caller
-(``inline="always"``): called, they took the tuples of clip buffers and results through numba's
-calling convention, a quarter of the contact time of a settled bed (bit-identical either way).
+Each function does a whole step of a pair's geometry and returns its sums as scalars: numba
+counts references to every array passed through a call, so many small calls per pair cost
+more than the arithmetic (see pdfem.kernels.overlap).
 """
 
 import numpy as np
@@ -23,49 +23,80 @@ from pdfem.kernels.overlap import (
     T_EQ,
     T_KIND,
     T_SRC,
-    _bbox_scale2,
-    clip_convex,
+    bbox_scale2,
+    clip_into,
     polygon_area_centroid,
-    quad_overlap_area,
+    quad_overlap_into,
 )
 
 # Nodes of a contact: four of A, then four of B
 NNOD = 8
 
 
-@njit(cache=True, inline="always")
-def normal_sums(ox, oy, otag, k, ebnd, a, b, qmap, acc):
-    """Add to acc (4,) the boundary-edge normal sums of the polygon (module docstring of
-    contact.py): acc[0:2] += N_A - N_B over grain-boundary edges, acc[2:4] += the sum over all of
-    A's overlap edges. Clip edge j lies on B's edge qmap[j] (-1: not on B's boundary)."""
+@njit(cache=True)
+def polygon_frame(px, py, pt, s, k, qmap, xa, xb, has_b, ebnd, a, b, g, n0, n1, s0, s1):
+    """The overlap polygon in slot s (k vertices): its area gradient dA/dx added to g (module
+    docstring of contact.py) and its normal sums added to (n0, n1, s0, s1), which are returned.
+
+    xa (4, 2): element A (the clip subject, T_SRC >= 0 edges); xb (4, 2): element B, whose edge
+    qmap[j] clip edge j lies on (T_SRC = -1 - j; -1 in qmap: a line inside B, no node moves it;
+    has_b False: a wall, no B). g (8, 2) collects A's nodes in rows 0-3 and B's in rows 4-7.
+    Normal sums: (n0, n1) += N_A - N_B over grain-boundary edges, (s0, s1) += the sum over
+    all of A's overlap edges (both of outward normal x length).
+    """
     for i in range(k):
         i1 = i + 1 if i + 1 < k else 0
-        # Outward normal x length of the overlap edge i -> i+1
-        ex = oy[i1] - oy[i]
-        ey = ox[i] - ox[i1]
-        src = otag[i, T_SRC]
+        src = pt[s, i, T_SRC]
+        # Outward normal x length of the overlap edge, and its midpoint
+        ex = py[s, i1] - py[s, i]
+        ey = px[s, i] - px[s, i1]
+        mx = 0.5 * (px[s, i] + px[s, i1])
+        my = 0.5 * (py[s, i] + py[s, i1])
         if src >= 0:
-            acc[2] += ex
-            acc[3] += ey
+            s0 += ex
+            s1 += ey
             if ebnd[a, src] != 0:
-                acc[0] += ex
-                acc[1] += ey
+                n0 += ex
+                n1 += ey
+            j = src
+            j1 = j + 1 if j + 1 < 4 else 0
+            dx = xa[j1, 0] - xa[j, 0]
+            dy = xa[j1, 1] - xa[j, 1]
+            f = ((mx - xa[j, 0]) * dx + (my - xa[j, 1]) * dy) / (dx * dx + dy * dy)
+            r0 = j
+            r1 = j1
         else:
-            e = qmap[-1 - src]
-            if e >= 0 and ebnd[b, e] != 0:
-                acc[0] -= ex
-                acc[1] -= ey
+            if not has_b or qmap[-1 - src] < 0:
+                continue
+            j = qmap[-1 - src]
+            if ebnd[b, j] != 0:
+                n0 -= ex
+                n1 -= ey
+            j1 = j + 1 if j + 1 < 4 else 0
+            dx = xb[j1, 0] - xb[j, 0]
+            dy = xb[j1, 1] - xb[j, 1]
+            f = ((mx - xb[j, 0]) * dx + (my - xb[j, 1]) * dy) / (dx * dx + dy * dy)
+            r0 = 4 + j
+            r1 = 4 + j1
+        # Rounding can put a midpoint a hair past its edge's end
+        f = min(max(f, 0.0), 1.0)
+        # The edge's linear shape functions at the midpoint (exact: the sweep is linear in f)
+        g[r0, 0] += (1.0 - f) * ex
+        g[r0, 1] += (1.0 - f) * ey
+        g[r1, 0] += f * ex
+        g[r1, 1] += f * ey
+    return n0, n1, s0, s1
 
 
-@njit(cache=True, inline="always")
-def unit_normal(acc):
+@njit(cache=True)
+def unit_normal(n0, n1, s0, s1):
     """Unit normal from A into B from normal_sums; A's whole part of the overlap boundary
     (topologically from A into B) when the boundary-edge sum vanishes or points backwards."""
-    nx = acc[0]
-    ny = acc[1]
-    if nx * acc[2] + ny * acc[3] <= 0.0:
-        nx = acc[2]
-        ny = acc[3]
+    nx = n0
+    ny = n1
+    if nx * s0 + ny * s1 <= 0.0:
+        nx = s0
+        ny = s1
     r = np.sqrt(nx * nx + ny * ny)
     if r == 0.0:
         return 0.0, 0.0
@@ -73,49 +104,6 @@ def unit_normal(acc):
 
 
 @njit(cache=True)
-def area_gradient(ox, oy, otag, k, xa, xb, qmap, g):
-    """Add dA/dx of the area of the tagged polygon (ox, oy, otag)[:k] to g (module docstring).
-
-    xa (4, 2): element A (the clip subject, T_SRC >= 0 edges); xb (4, 2): element B, whose edge
-    qmap[j] clip edge j lies on (T_SRC = -1 - j; -1 in qmap: a line inside B, no node moves it;
-    xb.shape[0] == 0: a wall). g (8, 2) collects A's nodes in rows 0-3 and B's in rows 4-7.
-    """
-    for i in range(k):
-        i1 = i + 1 if i + 1 < k else 0
-        src = otag[i, T_SRC]
-        # Outward normal x length of the overlap edge, and its midpoint
-        ex = oy[i1] - oy[i]
-        ey = ox[i] - ox[i1]
-        mx = 0.5 * (ox[i] + ox[i1])
-        my = 0.5 * (oy[i] + oy[i1])
-        if src >= 0:
-            j = src
-            j1 = j + 1 if j + 1 < 4 else 0
-            dx = xa[j1, 0] - xa[j, 0]
-            dy = xa[j1, 1] - xa[j, 1]
-            s = ((mx - xa[j, 0]) * dx + (my - xa[j, 1]) * dy) / (dx * dx + dy * dy)
-            r0 = j
-            r1 = j1
-        else:
-            if xb.shape[0] == 0 or qmap[-1 - src] < 0:
-                continue
-            j = qmap[-1 - src]
-            j1 = j + 1 if j + 1 < 4 else 0
-            dx = xb[j1, 0] - xb[j, 0]
-            dy = xb[j1, 1] - xb[j, 1]
-            s = ((mx - xb[j, 0]) * dx + (my - xb[j, 1]) * dy) / (dx * dx + dy * dy)
-            r0 = 4 + j
-            r1 = 4 + j1
-        # Rounding can put a midpoint a hair past its edge's end
-        s = min(max(s, 0.0), 1.0)
-        # The edge's linear shape functions at the midpoint (exact: the sweep is linear in s)
-        g[r0, 0] += (1.0 - s) * ex
-        g[r0, 1] += (1.0 - s) * ey
-        g[r1, 0] += s * ex
-        g[r1, 1] += s * ey
-
-
-@njit(cache=True, inline="always")
 def side_sum(g, r0):
     """Sum of rows r0 .. r0 + 3 of g (8, 2): dA for a translation of that side."""
     sx = 0.0
@@ -165,7 +153,7 @@ def split_quad(xb, t1, t2, m1, m2):
     return True
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def is_convex(xe):
     """True when the CCW quad xe (4, 2) is strictly convex (every corner turns left)."""
     for k in range(4):
@@ -189,14 +177,16 @@ def loaded_mass(g, nod, m, r0):
     return mm
 
 
-@njit(cache=True, inline="always")
-def overlap_extent(ox, oy, k, tx, ty, x0, y0, lohi):
-    """Widen lohi (2,) to the extent of the polygon (ox, oy)[:k] along the unit tangent
-    (tx, ty), measured from the point (x0, y0) near it (the overlap is tiny next to |x|)."""
+@njit(cache=True)
+def overlap_extent(px, py, s, k, tx, ty, x0, y0, lo, hi):
+    """(lo, hi) widened to the extent of the polygon in slot s (k vertices) along the unit
+    tangent (tx, ty), measured from the point (x0, y0) near it (the overlap is tiny next to
+    |x|)."""
     for i in range(k):
-        s = (ox[i] - x0) * tx + (oy[i] - y0) * ty
-        lohi[0] = min(lohi[0], s)
-        lohi[1] = max(lohi[1], s)
+        f = (px[s, i] - x0) * tx + (py[s, i] - y0) * ty
+        lo = min(lo, f)
+        hi = max(hi, f)
+    return lo, hi
 
 
 @njit(cache=True)
@@ -227,85 +217,94 @@ def nearest_edge(xe, ebnd, e, cx, cy):
 
 
 @njit(cache=True)
-def _real_crossings(ox, oy, otag, k, qmap, st):
-    """Track crossings of A's boundary with B's (clip lines that are B edges) in st (4,):
-    st[0] = count seen (0, 1, or 2 = two distinct points), st[1:3] = the first one."""
+def _real_crossings(px, py, pt, s, k, qmap, cnt, fx, fy):
+    """Crossings of A's boundary with B's (clip lines that are B edges) in the polygon in slot
+    s, added to (cnt, fx, fy): cnt the count seen (0, 1, or 2 = two distinct points), (fx, fy)
+    the first one. Returns the updated triple."""
     for i in range(k):
-        if st[0] >= 2.0 or otag[i, T_KIND] != K_X or qmap[otag[i, T_EQ]] < 0:
+        if cnt >= 2.0 or pt[s, i, T_KIND] != K_X or qmap[pt[s, i, T_EQ]] < 0:
             continue
-        if st[0] == 0.0:
-            st[0] = 1.0
-            st[1] = ox[i]
-            st[2] = oy[i]
-        elif ox[i] != st[1] or oy[i] != st[2]:
-            st[0] = 2.0
+        if cnt == 0.0:
+            cnt = 1.0
+            fx = px[s, i]
+            fy = py[s, i]
+        elif px[s, i] != fx or py[s, i] != fy:
+            cnt = 2.0
+    return cnt, fx, fy
 
 
 @njit(cache=True)
 def alloc_overlap_work():
-    """Scratch arrays of pair_overlap, allocated once per kernel call (not per pair)."""
-    return (np.empty(2), np.arange(4), np.empty((3, 2)), np.empty((3, 2)), np.empty(3, np.int64),
-            np.empty(3, np.int64), np.empty(3))
+    """Scratch arrays of pair_overlap: q4 (the identity map of B's edges), tri (2, 3, 2) and
+    tmap (2, 3) (a split B's triangles and their edge maps), allocated once per kernel call
+    (not per pair)."""
+    return np.arange(4), np.empty((2, 3, 2)), np.empty((2, 3), np.int64)
 
 
-@njit(cache=True, inline="always")
-def pair_overlap(xa, xb, ebnd, a, b, buf, buf2, work, g, acc):
-    """Overlap of elements A (xa) and B (xb), its area gradient added to g (8, 2) (zeroed here)
-    and its normal sums in acc (4,). B clips A when B is convex; otherwise B is split into two
-    triangles along the diagonal from its reflex corner and each clips A (the clip needs a convex
-    clip polygon; A as the subject may have any shape). The diagonal's overlap edges are not on
-    B's boundary: they get no force, and the two pieces' shares of them cancel in the area.
+@njit(cache=True)
+def _split_clip(xa, xb, px, py, pt, tri, tmap):
+    """Split the non-convex B (split_quad) into tri, tmap and clip A by each triangle into
+    slots 0 and 2; returns (split done, k1, k2)."""
+    t1 = tri[0]
+    t2 = tri[1]
+    if not split_quad(xb, t1, t2, tmap[0], tmap[1]):
+        return False, 0, 0
+    return True, clip_into(xa, 4, t1, 3, px, py, pt, 0), clip_into(xa, 4, t2, 3, px, py, pt, 2)
 
-    buf, buf2: (ox, oy, otag, wx, wy, wtag) clip buffers (alloc_clip_buffers); work: scratch
-    (alloc_overlap_work). Returns (status,
+
+@njit(cache=True)
+def pair_overlap(xa, xb, ebnd, a, b, px, py, pt, q4, tri, tmap, g):
+    """Overlap of elements A (xa) and B (xb), its area gradient added to g (8, 2) (zeroed here).
+    B clips A when B is convex; otherwise B is split into two triangles along the diagonal from
+    its reflex corner and each clips A (the clip needs a convex clip polygon; A as the subject
+    may have any shape). The diagonal's overlap edges are not on B's boundary: they get no
+    force, and the two pieces' shares of them cancel in the area.
+
+    px, py, pt: clip buffers (overlap.alloc_clip_buffers; the polygon is left in slot 0, a
+    split B's second piece in slot 2); q4, tri, tmap: scratch (alloc_overlap_work). Returns (status,
     area, cx, cy, nx, ny, width): status as quad_overlap_area; the unit normal from A into B and
     the width along the tangent (zero unless status is OV_OK).
     """
-    ox, oy, otag, wx, wy, wtag = buf
-    ox2, oy2, otag2, _, _, _ = buf2
-    lohi, q4, t1, t2, m1, m2, st = work
     for r in range(8):
         g[r, 0] = 0.0
         g[r, 1] = 0.0
-    for i in range(4):
-        acc[i] = 0.0
-    lohi[0] = 0.0
-    lohi[1] = 0.0
+    lo = 0.0
+    hi = 0.0
     if is_convex(xb):
-        st, area, cx, cy, k = quad_overlap_area(xa, xb, ox, oy, otag, wx, wy, wtag)
+        st, area, cx, cy, k = quad_overlap_into(xa, xb, px, py, pt, 0)
         if st != OV_OK:
             return st, area, cx, cy, 0.0, 0.0, 0.0
-        normal_sums(ox, oy, otag, k, ebnd, a, b, q4, acc)
-        area_gradient(ox, oy, otag, k, xa, xb, q4, g)
-        nx, ny = unit_normal(acc)
-        overlap_extent(ox, oy, k, -ny, nx, ox[0], oy[0], lohi)
-        return OV_OK, area, cx, cy, nx, ny, lohi[1] - lohi[0]
-    # Two convex pieces of B
-    if not split_quad(xb, t1, t2, m1, m2):
+        n0, n1, s0, s1 = polygon_frame(px, py, pt, 0, k, q4, xa, xb, True, ebnd, a, b, g, 0.0,
+                                       0.0, 0.0, 0.0)
+        nx, ny = unit_normal(n0, n1, s0, s1)
+        lo, hi = overlap_extent(px, py, 0, k, -ny, nx, px[0, 0], py[0, 0], lo, hi)
+        return OV_OK, area, cx, cy, nx, ny, hi - lo
+    # Two convex pieces of B (a call, not inlined: rare, and its own two clips)
+    done, k1, k2 = _split_clip(xa, xb, px, py, pt, tri, tmap)
+    if not done:
         return OV_INSIDE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    k1 = clip_convex(xa, 4, t1, 3, ox, oy, otag, wx, wy, wtag)
-    k2 = clip_convex(xa, 4, t2, 3, ox2, oy2, otag2, wx, wy, wtag)
     if k1 < 0 or k2 < 0:
         return OV_OVERFLOW, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
-    a1, c1x, c1y = polygon_area_centroid(ox, oy, k1)
-    a2, c2x, c2y = polygon_area_centroid(ox2, oy2, k2)
+    a1, c1x, c1y = polygon_area_centroid(px, py, 0, k1)
+    a2, c2x, c2y = polygon_area_centroid(px, py, 2, k2)
     a1 = max(a1, 0.0)
     a2 = max(a2, 0.0)
     area = a1 + a2
-    if area <= SLIVER * _bbox_scale2(xa):
+    if area <= SLIVER * bbox_scale2(xa):
         return OV_NONE, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     cx = (a1 * c1x + a2 * c2x) / area
     cy = (a1 * c1y + a2 * c2y) / area
-    st[:] = 0.0
-    _real_crossings(ox, oy, otag, k1, m1, st)
-    _real_crossings(ox2, oy2, otag2, k2, m2, st)
-    if st[0] < 2.0:
+    m1 = tmap[0]
+    m2 = tmap[1]
+    cnt, fx, fy = _real_crossings(px, py, pt, 0, k1, m1, 0.0, 0.0, 0.0)
+    cnt, fx, fy = _real_crossings(px, py, pt, 2, k2, m2, cnt, fx, fy)
+    if cnt < 2.0:
         return OV_INSIDE, area, cx, cy, 0.0, 0.0, 0.0
-    normal_sums(ox, oy, otag, k1, ebnd, a, b, m1, acc)
-    normal_sums(ox2, oy2, otag2, k2, ebnd, a, b, m2, acc)
-    area_gradient(ox, oy, otag, k1, xa, xb, m1, g)
-    area_gradient(ox2, oy2, otag2, k2, xa, xb, m2, g)
-    nx, ny = unit_normal(acc)
-    overlap_extent(ox, oy, k1, -ny, nx, cx, cy, lohi)
-    overlap_extent(ox2, oy2, k2, -ny, nx, cx, cy, lohi)
-    return OV_OK, area, cx, cy, nx, ny, lohi[1] - lohi[0]
+    n0, n1, s0, s1 = polygon_frame(px, py, pt, 0, k1, m1, xa, xb, True, ebnd, a, b, g, 0.0,
+                                   0.0, 0.0, 0.0)
+    n0, n1, s0, s1 = polygon_frame(px, py, pt, 2, k2, m2, xa, xb, True, ebnd, a, b, g, n0, n1,
+                                   s0, s1)
+    nx, ny = unit_normal(n0, n1, s0, s1)
+    lo, hi = overlap_extent(px, py, 0, k1, -ny, nx, cx, cy, lo, hi)
+    lo, hi = overlap_extent(px, py, 2, k2, -ny, nx, cx, cy, lo, hi)
+    return OV_OK, area, cx, cy, nx, ny, hi - lo

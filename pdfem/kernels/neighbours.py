@@ -1,4 +1,4 @@
-"""First-level contact detection on the cell grid, and contact-history lookup by key."""
+"""First-level contact detection on the cell grid, and the packing of contact keys for sorting."""
 
 import numpy as np
 from numba import njit
@@ -71,33 +71,6 @@ def grain_pairs(cell, owned, box, nx, ny, skin):
                     out[m, 1] = j
                     m += 1
     return out[:m]
-
-
-@njit(cache=True)
-def _less(a, i, b, j):
-    """Lexicographic a[i] < b[j] over 4 int64 columns."""
-    for c in range(4):
-        if a[i, c] != b[j, c]:
-            return a[i, c] < b[j, c]
-    return False
-
-
-@njit(cache=True)
-def lookup_sorted(keys, order, hkey, hval, out):
-    """out[order[k]] = hval of the row of hkey equal to keys[order[k]] (0 if none).
-
-    keys[order] and hkey must both be sorted lexicographically: one merge pass.
-    """
-    j = 0
-    nh = hkey.shape[0]
-    for k in range(order.shape[0]):
-        p = order[k]
-        while j < nh and _less(hkey, j, keys, p):
-            j += 1
-        if j < nh and not _less(keys, p, hkey, j):
-            out[p] = hval[j]
-        else:
-            out[p] = 0.0
 
 
 @njit(cache=True)

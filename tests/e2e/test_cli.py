@@ -15,12 +15,13 @@ ROOT = Path(__file__).resolve().parents[2]
 MPIRUN = ["bash", str(ROOT / "jobs" / "mpirun.sh")]
 
 
-def pdfem(args, cwd, ranks=None, timeout=300):
-    """Run ``python -m pdfem`` (under mpirun when ranks is given); return the process."""
+def pdfem(args, cwd, ranks=None, timeout=300, env=None):
+    """Run ``python -m pdfem`` (under mpirun when ranks is given; env: variables to set);
+    return the process."""
     cmd = [sys.executable, "-m", "pdfem"] + list(args)
     if ranks:
         cmd = MPIRUN + ["-n", str(ranks)] + cmd
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    env = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
     return subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout,
                           env=env)
 

@@ -173,3 +173,28 @@ def test_c_2x2_cap_reports_the_same_failing_element(fault):
     for a, b in zip(*out, strict=True):
         assert np.array_equal(np.isnan(a), np.isnan(b))
         assert _close(np.nan_to_num(a), np.nan_to_num(b))
+
+
+# ---- the contact pass (bench/c/contact_pass.c) ----
+
+
+def test_contact_pass_twin_gives_numba_bits_on_a_settled_bed(tmp_path):
+    # A 300-grain cap bed of pdfem bench contact, a few steps in: the C twin of the pass on
+    # that step's candidates, history and positions writes the same rows, bit for bit
+    from mpi4py import MPI
+
+    from pdfem.bench.beds import bed_scene, inflate_grains
+    from pdfem.bench.pass_yardstick import pass_yardstick
+    from pdfem.scene import parse_scene
+    from pdfem.solver import Simulation
+
+    if load("contact_pass") is None:
+        pytest.skip("no C compiler")
+    scene = parse_scene(bed_scene(300, str(tmp_path), material="cap"), str(tmp_path))
+    sim = Simulation(scene, MPI.COMM_SELF, init_state=inflate_grains(1.12))
+    for _ in range(5):
+        sim.step()
+    y = pass_yardstick(sim, 1)
+    assert y["same"] and y["unsupported"] == 0
+    assert y["contacts"] > 2.0 * 300 and y["evaluated"] > y["contacts"]
+    assert y["candidates"] > y["evaluated"]

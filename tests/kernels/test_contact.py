@@ -566,3 +566,95 @@ def test_non_convex_element_is_split_and_its_forces_stay_the_energy_gradient():
                 fd[k, c] = -(e[0] - e[1]) / 2e-7
         assert np.abs(fd - f).max() <= 1e-6 * np.abs(f).max()
     assert checked > 50
+
+
+# ---- the contact pass: its written-out convex case, its compact rows, its history merge ----
+
+
+def pass_args(x, conn, ebnd, egid, eloc, elen, cand, params, us=None, walls=None, hist=None,
+              dense=True, general=False, rows=None):
+    """Arguments and outputs of C.contact_pass: per-candidate law rows; walls (p0, n, mu);
+    history us (per candidate) or hist (hkey, hval)."""
+    n = len(cand)
+    rows = n if rows is None else rows
+    p0, wn, mu = walls if walls is not None else (np.zeros((0, 2)), np.zeros((0, 2)),
+                                                  np.zeros(0))
+    hkey, hval = hist if hist is not None else (np.zeros((0, 4), np.int64), np.zeros(0))
+    us = np.zeros(0) if us is None else us
+    out = (np.zeros(rows, np.int8), np.zeros((rows, 4), np.int64), np.zeros((rows, 2), np.int64),
+           np.zeros((rows, C.NNOD), np.int64), np.zeros((rows, C.NNOD)),
+           np.zeros((rows, C.NNOD, 2)), np.zeros(rows), np.zeros((rows, C.NRES)))
+    args = (x, 1e-6 * np.cos(np.arange(x.size)).reshape(x.shape), np.linspace(1.0, 2.0, len(x)),
+            conn, ebnd, egid, eloc, elen, np.zeros(len(conn), np.int64), params, 0,
+            np.arange(n), p0, wn, mu, np.asarray(cand, np.int64), hkey, hval, us, dense, general,
+            1e-9, np.empty((len(conn), 4)), np.zeros((0, 2)), 0)
+    return args, out
+
+
+def test_written_out_convex_case_equals_the_clip_library():
+    # The pass evaluates a convex B in its own loop (no arrays through calls); general=True
+    # takes contact_frame.pair_overlap, the clip library the split and the walls use. Random
+    # convex and dart-shaped pairs, both orientations, damping and friction on: every output
+    # bit for bit
+    rng = np.random.default_rng(8)
+    x, conn, ebnd, egid, eloc, elen, pairs = random_pairs(rng, 300)
+    for p in range(0, 300, 3):
+        x[4 * pairs[p, 1]:4 * pairs[p, 1] + 4] = dart(rng) + x[4 * pairs[p, 0]].mean(0) * 0
+    pairs[::2] = pairs[::2, ::-1]
+    par = law_params(300, dmax=2.0, ks=2e9, zeta=0.4)
+    us = rng.normal(0, 1e-5, 300)
+    outs = []
+    for general in (False, True):
+        args, out = pass_args(x, conn, ebnd, egid, eloc, elen, pairs, par, us=us,
+                              general=general)
+        C.contact_pass(*args, *out)
+        outs.append(out)
+    assert np.sum(outs[0][0] == C.C_ACTIVE) > 150
+    for a, b in zip(*outs, strict=True):
+        assert a.tobytes() == b.tobytes()
+    # And element_pair_forces is the pass, one row per pair
+    _, ref = run_pairs(x, args[1], conn, ebnd, egid, eloc, elen, pairs, par, us, args[2],
+                       1e-9)
+    for a, b in zip(ref, [outs[0][i] for i in (0, 3, 4, 5, 6, 7)], strict=True):
+        assert a.tobytes() == b.tobytes()
+
+
+def test_compact_rows_and_history_merge_equal_the_dense_rows():
+    # A key-sorted candidate list with pairs far apart (skipped), walls, and a history table
+    # holding some of the keys: compact rows are the touching candidates' dense rows, in
+    # order, and the history found by the merge is the one given per candidate
+    rng = np.random.default_rng(9)
+    x, conn, ebnd, egid, eloc, elen, pairs = random_pairs(rng, 60)
+    for p in range(20, 40):
+        x[4 * pairs[p, 1]:4 * pairs[p, 1] + 4] += 50.0
+    walls = (np.array([[0.0, -0.2]]), np.array([[0.0, 1.0]]), np.array([0.7]))
+    cand = np.vstack([pairs, np.stack([np.arange(0, 120, 7), np.full(18, -1)], 1)])
+    keys = np.stack([egid[cand[:, 0]], eloc[cand[:, 0]],
+                     np.where(cand[:, 1] >= 0, egid[np.maximum(cand[:, 1], 0)], cand[:, 1]),
+                     np.where(cand[:, 1] >= 0, eloc[np.maximum(cand[:, 1], 0)], 0)], 1)
+    order = np.lexsort(keys.T[::-1])
+    cand, keys = cand[order], keys[order]
+    par = np.tile(law_params(1, dmax=2.0, ks=2e9)[0], (len(cand), 1))
+    us = np.where(rng.random(len(cand)) < 0.5, rng.normal(0, 1e-5, len(cand)), 0.0)
+    held = us != 0.0
+    args, dense = pass_args(x, conn, ebnd, egid, eloc, elen, cand, par, us=us, walls=walls)
+    nd = C.contact_pass(*args, *dense)
+    hist = (keys[held], us[held])
+    # The forces in candidate (key) order, owned nodes only
+    n_owned = len(x) - 40
+    ref = np.zeros_like(x)
+    CS.accumulate_sorted(np.arange(len(cand)), dense[0], dense[3], dense[5], n_owned, ref)
+    for rows in (4, 200):
+        args, comp = pass_args(x, conn, ebnd, egid, eloc, elen, cand, par, walls=walls,
+                               hist=hist, dense=False, rows=rows)
+        # Added by the pass itself, every contact's also when its row does not fit
+        fc = np.zeros_like(x)
+        args = args[:-2] + (fc, n_owned)
+        n, nbad, nev = C.contact_pass(*args, *comp)
+        assert (n, nbad) == (np.sum(dense[0] != C.C_NONE), nd[1]) and nev == nd[2]
+        assert np.array_equal(fc, ref) and fc[:n_owned].any() and not fc[n_owned:].any()
+    touch = np.flatnonzero(dense[0] != C.C_NONE)
+    assert 20 < len(touch) < len(cand) - 20 and np.any(cand[touch, 1] < 0)
+    for a, b in zip(dense, comp, strict=True):
+        assert a[touch].tobytes() == b[:n].tobytes()
+    assert np.array_equal(comp[1][:n], keys[touch])

@@ -87,7 +87,7 @@ def test_star_overlap_has_eight_crossings():
     q = (SQ - c) @ rot(np.pi / 4).T + c
     st, area, *_, k = O.quad_overlap(SQ, q, *buf)
     assert st == O.OV_OK and k == 8
-    assert np.sum(buf[2][:k, O.T_KIND] == O.K_X) == 8
+    assert np.sum(buf[2][0, :k, O.T_KIND] == O.K_X) == 8
     assert area == pytest.approx(2 * (np.sqrt(2) - 1), rel=1e-14)
 
 
@@ -96,9 +96,8 @@ def test_halfplane_closed_form():
     # Diamond (square rotated 45 deg) with its lowest vertex h below the wall: area h^2
     dia = (SQ - 0.5) @ rot(np.pi / 4).T + [0.0, np.sqrt(0.5)]
     for h in [0.05, 0.2, 0.5]:
-        st, area, cx, cy, c1x, c1y, c2x, c2y, k = O.halfplane_overlap(
-            dia, np.array([0.0, h]), np.array([0.0, 1.0]), *buf
-        )
+        st, area, cx, cy, c1x, c1y, c2x, c2y, k = O.halfplane_overlap(dia, 0.0, h, 0.0, 1.0,
+                                                                           *buf)
         assert st == O.OV_OK
         assert area == pytest.approx(h * h, rel=1e-14)
         assert (cx, cy) == pytest.approx((0.0, 2 * h / 3), abs=1e-14)
@@ -112,24 +111,24 @@ def test_halfplane_closed_form():
         a = rng.uniform(0, 2 * np.pi)
         n = np.array([np.cos(a), np.sin(a)])
         p0 = rng.uniform(-0.5, 0.5, 2)
-        area = O.halfplane_overlap(p, p0, n, *buf)[1]
+        area = O.halfplane_overlap(p, *p0, *n, *buf)[1]
         big = np.array([[-1, -50], [1, -50], [1, 0], [-1, 0]]) * [50, 1]
         wall = big @ np.array([[n[1], -n[0]], [n[0], n[1]]]) + p0
         assert area == pytest.approx(ref_overlap(p, wall)[0], rel=1e-11, abs=1e-13)
     # Entirely behind the wall: guard
-    st = O.halfplane_overlap(SQ, np.array([0.0, 2.0]), np.array([0.0, 1.0]), *buf)[0]
+    st = O.halfplane_overlap(SQ, 0.0, 2.0, 0.0, 1.0, *buf)[0]
     assert st == O.OV_INSIDE
 
 
 def test_early_out_keeps_the_clips_answer_for_a_non_convex_element():
     # B lies wholly outside one edge line of the dart-shaped A, yet inside A: the clip (A by
     # B's lines) finds the overlap, and the early out must not hide it
-    from pdfem.kernels.overlap import _outside_edge
+    from pdfem.kernels.overlap import outside_edge
 
     xa = np.array([[0.0, 0.0], [4.0, 0.0], [2.0, 1.0], [2.0, 3.0]])
     xb = np.array([[3.0544705, 0.6247629], [2.8157275, 0.85142066],
                    [2.58906975, 0.61267766], [2.82781274, 0.38601991]])
-    assert _outside_edge(xa, xb)
+    assert outside_edge(xa, xb)
     st = O.quad_overlap(xa, xb, *O.alloc_clip_buffers())
     assert st[0] != O.OV_NONE and st[1] > 0.04
     # Far apart: the early out answers, with the clip's result (no overlap)
@@ -139,7 +138,7 @@ def test_early_out_keeps_the_clips_answer_for_a_non_convex_element():
 
 def test_quad_overlap_area_is_the_clip_and_classify_of_the_general_path():
     # The contact kernel's status, area and centroid equal those of clipping A by B and
-    # classifying the polygon with its chord (_classify), on random pairs, containment and
+    # classifying the polygon with its chord (classify), on random pairs, containment and
     # near misses
     rng = np.random.default_rng(11)
     buf, buf2 = O.alloc_clip_buffers(), O.alloc_clip_buffers()
@@ -149,11 +148,11 @@ def test_quad_overlap_area_is_the_clip_and_classify_of_the_general_path():
     seen = set()
     for p, q in cases:
         k0 = O.clip_convex(p, 4, q, 4, *buf)
-        ref = O._classify(buf[0], buf[1], buf[2], k0, O._bbox_scale2(p))
+        ref = O.classify(buf[0], buf[1], buf[2], k0, O.bbox_scale2(p))
         st, area, cx, cy, k = O.quad_overlap_area(p, q, *buf2)
         assert (st, area, cx, cy) == ref[:4]
         if st != O.OV_NONE:
-            assert k == k0 and np.array_equal(buf[0][:k], buf2[0][:k])
+            assert k == k0 and np.array_equal(buf[0][0, :k], buf2[0][0, :k])
             # quad_overlap adds the chord of the same polygon
             assert O.quad_overlap(p, q, *buf2)[4:8] == ref[4:8]
         seen.add(st)

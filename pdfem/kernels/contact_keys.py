@@ -1,0 +1,50 @@
+"""Global keys of candidate contacts, and the merge of two key-sorted candidate lists.
+
+A candidate is an element pair (a, b) (local element indices, a of lower global key) or an
+element-wall pair (e, -1 - w). Its key is (gid_a, elem_a, gid_b, elem_b), a wall's
+(gid, elem, -1 - w, 0): the order in which contact forces are added to a node on every rank.
+"""
+
+from numba import njit
+
+
+@njit(cache=True)
+def candidate_key(cand, c, egid, eloc):
+    """Global contact key of candidate c of cand (n, 2)."""
+    a = cand[c, 0]
+    b = cand[c, 1]
+    if b >= 0:
+        return egid[a], eloc[a], egid[b], eloc[b]
+    return egid[a], eloc[a], b, 0
+
+
+@njit(cache=True)
+def _key_le(c1, i, c2, j, egid, eloc):
+    """key(c1[i]) <= key(c2[j])."""
+    a0, a1, a2, a3 = candidate_key(c1, i, egid, eloc)
+    b0, b1, b2, b3 = candidate_key(c2, j, egid, eloc)
+    if a0 != b0:
+        return a0 < b0
+    if a1 != b1:
+        return a1 < b1
+    if a2 != b2:
+        return a2 < b2
+    return a3 <= b3
+
+
+@njit(cache=True)
+def merge_candidates(c1, c2, egid, eloc, out):
+    """Merge two key-sorted candidate lists into out (n1 + n2, 2), c1's first on equal keys."""
+    i = 0
+    j = 0
+    n1 = c1.shape[0]
+    n2 = c2.shape[0]
+    for k in range(n1 + n2):
+        if j >= n2 or (i < n1 and _key_le(c1, i, c2, j, egid, eloc)):
+            out[k, 0] = c1[i, 0]
+            out[k, 1] = c1[i, 1]
+            i += 1
+        else:
+            out[k, 0] = c2[j, 0]
+            out[k, 1] = c2[j, 1]
+            j += 1

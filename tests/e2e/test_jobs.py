@@ -33,7 +33,7 @@ echo "$@" >> sbatch.calls
 
 def test_slurm_script_chains_a_restart(tmp_path):
     text = settling_bed(n=40, cols=10, end=1.0).replace("safety = 0.5",
-                                                        "safety = 0.5\nmax_steps = 6000")
+                                                        "safety = 0.5\nmax_steps = 20000")
     (tmp_path / "s.toml").write_text(text)
     stubs = tmp_path / "bin"
     stubs.mkdir()
@@ -127,8 +127,9 @@ def _signal(p, whom, sig):
                 pass
 
 
-# A 2-rank run of about 4 s (a settling bed, 4000 steps)
-STEPS = 4000
+# A 2-rank run of a few seconds (a settling bed, 16000 steps), long enough to be signalled
+# in the middle
+STEPS = 16000
 
 
 def _launch(tmp_path, args, text=None, script=None):

@@ -74,6 +74,7 @@ from pdfem.kernels.contact_frame import (
     polygon_frame,
     unit_normal,
 )
+from pdfem.kernels.contact_keys import key_less
 from pdfem.kernels.contact_law import (
     P_DMAX,
     P_KN0,
@@ -128,18 +129,6 @@ C_INSIDE = -1  # one element inside the other (or behind the wall): penetration 
 C_NOEDGE = -2  # an element of the pair has no boundary edge
 C_NONORMAL = -3  # the contact normal is undefined (symmetric overlap)
 C_OVERFLOW = -4  # clip buffer overflow (cannot happen for convex quads)
-
-
-@njit(cache=True)
-def _key_less(h0, h1, h2, h3, k0, k1, k2, k3):
-    """(h0, h1, h2, h3) < (k0, k1, k2, k3) lexicographically."""
-    if h0 != k0:
-        return h0 < k0
-    if h1 != k1:
-        return h1 < k1
-    if h2 != k2:
-        return h2 < k2
-    return h3 < k3
 
 
 @njit(cache=True)
@@ -464,10 +453,10 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
         key2 = b if wall else egid[cand[c, 1]]
         key3 = 0 if wall else eloc[cand[c, 1]]
         if lookup:
-            while h < nh and _key_less(hkey[h, 0], hkey[h, 1], hkey[h, 2], hkey[h, 3], key0,
+            while h < nh and key_less(hkey[h, 0], hkey[h, 1], hkey[h, 2], hkey[h, 3], key0,
                                        key1, key2, key3):
                 h += 1
-            us = hval[h] if h < nh and not _key_less(key0, key1, key2, key3, hkey[h, 0],
+            us = hval[h] if h < nh and not key_less(key0, key1, key2, key3, hkey[h, 0],
                                                      hkey[h, 1], hkey[h, 2], hkey[h, 3]) else 0.0
         else:
             us = us_in[c]

@@ -19,17 +19,23 @@ def candidate_key(cand, c, egid, eloc):
 
 
 @njit(cache=True)
+def key_less(h0, h1, h2, h3, k0, k1, k2, k3):
+    """(h0, h1, h2, h3) < (k0, k1, k2, k3) lexicographically."""
+    if h0 != k0:
+        return h0 < k0
+    if h1 != k1:
+        return h1 < k1
+    if h2 != k2:
+        return h2 < k2
+    return h3 < k3
+
+
+@njit(cache=True)
 def _key_le(c1, i, c2, j, egid, eloc):
     """key(c1[i]) <= key(c2[j])."""
     a0, a1, a2, a3 = candidate_key(c1, i, egid, eloc)
     b0, b1, b2, b3 = candidate_key(c2, j, egid, eloc)
-    if a0 != b0:
-        return a0 < b0
-    if a1 != b1:
-        return a1 < b1
-    if a2 != b2:
-        return a2 < b2
-    return a3 <= b3
+    return not key_less(b0, b1, b2, b3, a0, a1, a2, a3)
 
 
 @njit(cache=True)

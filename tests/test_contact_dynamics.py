@@ -5,6 +5,7 @@ import pytest
 from mpi4py import MPI
 
 from pdfem.energy import global_terms
+from pdfem.io.contacts import contact_rows, split_rows
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.broad_phase import element_bboxes, pairs_from_bboxes
 from pdfem.kernels.contact import C_ACTIVE, NRES, element_pair_forces, element_wall_forces
@@ -256,3 +257,33 @@ def test_contact_below_dt_min_names_the_bodies(tmp_path):
         sim = Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
         while sim.t < sim.t_end:
             sim.step()
+
+
+def test_per_contact_slip_and_dissipation_of_a_sliding_block(tmp_path):
+    """The per-contact output of a block sliding down a frictional incline, over the late
+    steps: the wall carries m g cos(theta) on average, a slipping contact is at the friction
+    limit and slips at the block's speed, and the dissipation is mu |F_n| v (Coulomb)."""
+    theta, mu, g = np.radians(30.0), 0.2, 1.0e4
+    sim = Simulation(parse_scene(_incline(theta, mu, g), str(tmp_path)), MPI.COMM_SELF)
+    s = sim.store
+    weight = s.m.sum() * g * np.cos(theta)
+    fn, diss, bound = [], [], []
+    while sim.t < sim.t_end:
+        sim.step()
+        if sim.t < 0.5 * sim.t_end:
+            continue
+        rows = split_rows(contact_rows(sim))
+        v = abs((s.m * s.v[:, 0]).sum() / s.m.sum())
+        assert (rows["key"][:, 2] < 0).all() and (rows["element"][:, 1] == -1).all()
+        assert np.allclose(rows["normal"], [0.0, -1.0])
+        fn.append(-rows["force"][:, 0].sum())
+        slipping = rows["dissipation"] > 0.0
+        f_n, f_s = np.abs(rows["force"][:, 0]), np.abs(rows["force"][:, 1])
+        assert (f_s <= mu * f_n * (1 + 1e-12)).all()
+        assert np.allclose(f_s[slipping], mu * f_n[slipping], rtol=1e-12)
+        assert np.allclose(rows["slip_rate"][slipping], v, rtol=0.05)
+        diss.append(rows["dissipation"].sum())
+        bound.append(mu * f_n.sum() * v)
+        assert (rows["heat"] == 0.0).all()
+    assert np.mean(fn) == pytest.approx(weight, rel=0.05)
+    assert np.mean(diss) == pytest.approx(np.mean(bound), rel=0.02)

@@ -9,6 +9,7 @@ from pdfem.driver import run
 from pdfem.effects import REGISTRY
 from pdfem.energy import DIAGNOSTIC, SIGN, TERMS
 from pdfem.errors import InputError, SimulationError
+from pdfem.io.contacts import contact_rows, split_rows
 from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.heat import conduction_flows, element_to_nodes
 from pdfem.kernels.params import COND, NPAR, RHO
@@ -333,6 +334,35 @@ h = 1.0e7
     assert thermal[-1] == pytest.approx(fric[-1], rel=1e-6)
     # The oblique overlap contact itself closes its balance to about 1 % (dt -> 0: 1.1 %)
     assert err.max() < 0.02
+
+
+def test_per_contact_heat_is_h_width_delta_t(tmp_path):
+    """The per-contact output's heat: with each grain at a uniform temperature, a contact
+    passes h w (T_B - T_A) from B into A (w its width), whatever the friction does."""
+    h = 1.0e7
+    text = collision(v=20.0, mu=0.5, end=6e-6, extra=f"""
+[heat]
+initial = 300.0
+[contact_conductance]
+h = {h!r}
+[friction_heating]
+""")
+    text = text.replace('velocity = [20.0, 0.0]', 'velocity = [20.0, 8.0]')
+    text = text.replace('shear = 4.4e9', 'shear = 4.4e9\nspecific_heat = 1000.0\n'
+                        'conductivity = 0.4', 1)
+    sim = simulate(text, tmp_path)
+    checked = 0
+    while sim.t < sim.t_end and checked < 20:
+        s = sim.store
+        temp = {0: 300.0, 1: 450.0}
+        s.T[:] = [temp[int(g)] for g in s.gid[s.node_body]]
+        sim.step()
+        rows = split_rows(contact_rows(sim))
+        for key, w, q in zip(rows["key"], rows["width"], rows["heat"], strict=True):
+            assert q == pytest.approx(h * w * (temp[int(key[2])] - temp[int(key[0])]),
+                                      rel=1e-12)
+            checked += 1
+    assert checked >= 20
 
 
 @pytest.mark.parametrize("name", [n for n in REGISTRY if n not in

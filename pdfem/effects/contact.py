@@ -167,6 +167,7 @@ class Contact(Effect):
         self._outputs(1024)
         self._boxes = np.empty((0, 4))
         self._last = None
+        self._q = None
 
     def setup(self, sim):
         self.after_rebuild(sim)
@@ -298,7 +299,8 @@ class Contact(Effect):
         self._apply(sim, keys, active, nodes, weights, fnod, res, elems, not added)
         self._bookkeeping(sim, keys, active, us_out, res, elems)
         self._last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys,
-                      "candidates": cand.shape[0], "evaluated": nev}
+                      "candidates": cand.shape[0], "evaluated": nev, "elems": elems, "dt": dt,
+                      "q": self._q}
 
     def _check(self, sim, keys, active, res):
         """Guards: a degenerate overlap, or a mean overlap delta = area / L (the law's) beyond
@@ -324,6 +326,8 @@ class Contact(Effect):
             q = np.zeros((active.shape[0], 4))
             contact_heat(active, nodes, weights, res, s.T, self.heat_h, self.heat_fraction,
                          sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1], q[:, 2], q[:, 3])
+        # Kept for the per-contact output (pdfem.io.contacts)
+        self._q = q
         order = np.arange(active.shape[0])
         # No blocks: every contact is local, already in key order
         if sim.nglobal == 0:

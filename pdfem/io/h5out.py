@@ -21,6 +21,7 @@ import numpy as np
 
 from pdfem import __version__
 from pdfem.errors import InputError
+from pdfem.io.contacts import contact_rows, copy_contacts, drop_after, write_contacts
 from pdfem.io.gather import to_blocks
 from pdfem.io.layout import FRAME_LAYOUT
 from pdfem.io.segments import (
@@ -38,8 +39,9 @@ from pdfem.store import ranges
 
 def frame_fields(nip, fields):
     """The frame datasets of a run: the scene's output.fields, plus ``stress_cell`` (the
-    element mean) when elements have several integration points."""
-    out = list(fields)
+    element mean) when elements have several integration points; ``contacts`` is not one
+    (:mod:`pdfem.io.contacts`)."""
+    out = [name for name in fields if name != "contacts"]
     if "stress" in out and nip > 1:
         out.insert(out.index("stress") + 1, "stress_cell")
     return out
@@ -81,6 +83,7 @@ class RunWriter:
         comm = sim.comm
         self.comm, self.path = comm, path
         self.fields = tuple(frame_fields(sim.nip, fields))
+        self.contacts = "contacts" in fields
         self.tmp = path + ".part"
         self.nframes_max = nframes
         self.nn_tot, self.ne_tot = sim.layout.nnode, sim.layout.nelem
@@ -208,6 +211,8 @@ class RunWriter:
             d = self.dsets[name]
             if hi > lo:
                 d[k, lo:hi] = blk.reshape((hi - lo,) + d.shape[2:])
+        if self.contacts:
+            write_contacts(self.comm, self.f, self.nframe, contact_rows(sim))
         # Every rank writes the (same) time: a write by one rank alone can allocate a chunk
         # of a reopened file on that rank only, and the collective close then hangs
         self.time[k] = sim.t
@@ -220,6 +225,8 @@ class RunWriter:
         self.time.resize((count,))
         for d in self.dsets.values():
             d.resize((count,) + d.shape[1:])
+        if self.contacts:
+            drop_after(self.f, self.nframe)
         return [first, count]
 
     def close_segment(self):
@@ -265,7 +272,8 @@ class RunWriter:
             self.time, self.dsets = fr["time"], {name: fr[name] for name in self.fields}
             self.seg_first = 0
             self._cut()
-            copy_frames(comm, fr, self.tmp, self.segments, self.nframe, self.fields)
+            copy_frames(comm, fr, self.tmp, self.segments, self.nframe, self.fields,
+                        copy_contacts if self.contacts else None)
             self.f.attrs["nranks"] = comm.size
         else:
             self._cut()

@@ -105,9 +105,10 @@ def source_of(segments, nframe):
     return seg, row
 
 
-def copy_frames(comm, dst, tmp, segments, nframe, names):
+def copy_frames(comm, dst, tmp, segments, nframe, names, extra=None):
     """Copy into the frames group ``dst`` (sized to ``nframe``) the frames whose valid copy
-    is in a segment after the first (collective: each rank copies its block of rows)."""
+    is in a segment after the first (collective: each rank copies its block of rows); with
+    ``extra``, also ``extra(comm, dst_file, src_file, frames)`` per segment."""
     seg, row = source_of(segments, nframe)
     for i in range(1, len(segments)):
         frames = np.nonzero(seg == i)[0]
@@ -123,6 +124,8 @@ def copy_frames(comm, dst, tmp, segments, nframe, names):
                 for k, r in zip(frames, row[frames], strict=True):
                     if hi > lo:
                         d[k, lo:hi] = s[r, lo:hi]
+            if extra is not None:
+                extra(comm, dst.file, f, frames)
 
 
 def start_join(tmp):

@@ -20,7 +20,7 @@ SIDES = ("left", "right", "bottom", "top")
 HEAT_FIELDS = ("heat_plastic", "heat_viscous", "heat_thermoelastic", "heat_friction",
                "heat_conducted")
 OUTPUT_FIELDS = ("x", "v", "stress", "temperature", "kappa", "plastic_strain",
-                 "element_temperature", "contact_force") + HEAT_FIELDS
+                 "element_temperature", "contact_force", "contacts") + HEAT_FIELDS
 
 # [domain]
 DOMAIN = {
@@ -325,7 +325,10 @@ OUTPUT = {
                   "zz), element_temperature; the heat each element received since t = 0 "
                   "[J/m] by mechanism: heat_plastic, heat_viscous, heat_thermoelastic, "
                   "heat_friction, heat_conducted (net, across its contacts)) written per "
-                  "frame; contact_force = the nodal force of the contacts (needs [contact])",
+                  "frame; contact_force = the nodal force of the contacts (needs [contact]); "
+                  "contacts = every active contact of the frame's step (key, point, normal, "
+                  "overlap, width, forces, slip rate, frictional dissipation, heat conducted "
+                  "across) in /contacts/<frame> (needs [contact])",
                   choices=OUTPUT_FIELDS),
     "energy_interval": _pos("float", Derived("interval / 10"), "time between energy-balance "
                             "samples", "s"),

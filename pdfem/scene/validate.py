@@ -323,7 +323,8 @@ def _output(value, t_end, heat, cap=False, contact=False):
                            *((f, heat, "the [heat] table") for f in S.HEAT_FIELDS),
                            ("kappa", cap, "a cap material"),
                            ("plastic_strain", cap, "a cap material"),
-                           ("contact_force", contact, "the [contact] table")):
+                           ("contact_force", contact, "the [contact] table"),
+                           ("contacts", contact, "the [contact] table")):
         if name in o["fields"] and not ok:
             raise SceneError("output.fields", f'"{name}" needs {need}')
     if "x" not in o["fields"]:

@@ -114,7 +114,9 @@ def test_settling_bed_bit_identical_after_20000_steps(tmp_path):
 
     text = settling_bed(n=200, end=1.0, partition="rcb").replace(
         "safety = 0.5", "safety = 0.5\nmax_steps = 20000")
-    text = text.replace("interval = 0.25", "interval = 5.0e-5")
+    # Every contact of each frame too (/contacts/<frame>)
+    text = text.replace("interval = 0.25", 'interval = 5.0e-5\nfields = ["x", "v", "stress", '
+                        '"contacts"]')
     (tmp_path / "bed.toml").write_text(text)
     ref = None
     for n in (1, 2, 3, 4):
@@ -125,7 +127,9 @@ def test_settling_bed_bit_identical_after_20000_steps(tmp_path):
         if ref is None:
             ref = d
             assert d["energy/contact"][-1] > 0 and len(d["frames/time"]) >= 4
+            assert d[f"contacts/{len(d['frames/time']) - 1:06d}/key"].shape[0] > 100
             continue
+        assert sorted(d) == sorted(ref)
         for k in ref:
             assert np.array_equal(ref[k], d[k]), f"{k} differs on {n} ranks"
 

@@ -4,6 +4,7 @@ its paying mechanical term, and the run files are the same on 1 and 2 ranks."""
 import numpy as np
 import pytest
 
+from pdfem.io.contacts import COLUMNS
 from pdfem.scene.schema import HEAT_FIELDS
 from tests.e2e.test_cli import datasets, pdfem
 from tests.scenes import packaged, write_scene
@@ -22,7 +23,9 @@ def thermal_shot(end=4.0e-7):
     doc["friction_heating"] = {"fraction": FRACTION}
     doc["contact_conductance"] = {"h": 1.0e8}
     doc.pop("shock")
-    doc["output"].update(path="hot.h5", interval=end / 4, energy_interval=end / 4)
+    doc["output"].update(path="hot.h5", interval=end / 4, energy_interval=end / 4,
+                         fields=["x", "v", "stress", "kappa", "plastic_strain", "temperature",
+                                 "element_temperature", *HEAT_FIELDS, "contacts"])
     return doc
 
 
@@ -87,3 +90,46 @@ def test_restart_continues_the_heat_by_mechanism(runs):
     assert nb >= 1
     for k in ("frames/time", "frames/temperature") + tuple(f"frames/{f}" for f in HEAT_FIELDS):
         assert np.array_equal(one[k][-nb:], r[k][1:]), k
+    # The contacts of the later frames too (the restart's first frame has none: no step yet)
+    n1 = one["frames/time"].shape[0]
+    assert r["contacts/000000/key"].shape[0] == 0
+    for j in range(1, nb + 1):
+        for name, _, _ in COLUMNS:
+            assert np.array_equal(one[f"contacts/{n1 - nb - 1 + j:06d}/{name}"],
+                                  r[f"contacts/{j:06d}/{name}"]), (j, name)
+
+
+def test_per_contact_output(runs):
+    """/contacts/<frame>: every frame, keys in order and matching /mesh, unit normals,
+    overlaps below delta_max, forces within the Coulomb bound (at it where the contact
+    dissipates: dissipation = |F_s| slip rate), heat passed across the grain contacts."""
+    d, one, _ = runs
+    doc = thermal_shot()
+    mu, dmax = doc["contact"]["friction"], doc["contact"]["delta_max"]
+    nf = one["frames/time"].shape[0]
+    assert sorted({k.split("/")[1] for k in one if k.startswith("contacts/")}) == \
+        [f"{k:06d}" for k in range(nf)]
+    ebody = one["mesh/elem_body"]
+    hot = 0
+    for k in range(1, nf):
+        c = {name: one[f"contacts/{k:06d}/{name}"] for name, _, _ in COLUMNS}
+        key, el = c["key"], c["element"]
+        assert key.shape[0] > 0
+        order = np.lexsort((key[:, 3], key[:, 2], key[:, 1], key[:, 0]))
+        assert np.array_equal(order, np.arange(key.shape[0]))
+        assert np.array_equal(ebody[el[:, 0]], key[:, 0])
+        pair = key[:, 2] >= 0
+        assert np.array_equal(ebody[el[pair, 1]], key[pair, 2])
+        assert (el[~pair, 1] == -1).all()
+        assert np.allclose(np.hypot(*c["normal"].T), 1.0)
+        assert (c["overlap"] > 0).all() and (c["overlap"] < dmax).all()
+        fn, fs = np.abs(c["force"][:, 0]), np.abs(c["force"][:, 1])
+        walls = ~pair
+        assert (fs[pair] <= mu * fn[pair] * (1 + 1e-12)).all()
+        slip = c["dissipation"] > 0
+        assert np.allclose(c["dissipation"][slip], fs[slip] * c["slip_rate"][slip],
+                           rtol=1e-12)
+        assert (c["slip_rate"][walls & ~slip] == 0).all()
+        # Conductance (h > 0) passes heat across the grain contacts
+        hot += int((c["heat"][pair] != 0.0).sum())
+    assert hot > 0

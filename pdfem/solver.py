@@ -18,6 +18,7 @@ from partition import CellGrid, needs_rebalance, partition
 from pdfem import build
 from pdfem.drive import Drives
 from pdfem.effects import active_effects
+from pdfem.effects.base import Effect
 from pdfem.effects.contact import check_contact_scene
 from pdfem.energy import energy_floor, initial_strain_work
 from pdfem.errors import InputError, SimulationError
@@ -31,6 +32,7 @@ from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
 from pdfem.mesh.quality import corner_jacobians
 from pdfem.parallel.exchange import owned_grain_cells, rebuild
+from pdfem.parallel.mpi import global_min
 from pdfem.store import NODE, Batch, Field, Store, core_fields
 from pdfem.timers import Timers
 
@@ -85,6 +87,9 @@ class Simulation:
             self._build_restart(restart)
         for eff in self.effects:
             eff.setup(self)
+        # Effects whose step_minimum travels with the time step's reduction
+        self.minima = [e for e in self.effects
+                       if type(e).step_minimum is not Effect.step_minimum]
         self.drives = Drives(self)
         self.guards = Guards(self)
         self._cap_contact(restart)
@@ -106,6 +111,7 @@ class Simulation:
             self.safety = min(self.safety, st.get("safety", self.safety))
             self.guards.retries_left = min(self.guards.retries,
                                            st.get("dt_retries_left", self.guards.retries))
+            self.refresh_minima()
             return
         # Forces at t = 0 and the first half step; energy accumulators from the t = 0 state
         initial_strain_work(self)
@@ -337,9 +343,12 @@ class Simulation:
                 limiter = limiter.dt_limiter(self, dt_loc)
             self.fail(f"check time step: the stable dt {dt_loc:.3e} s (limited by {limiter}) is "
                       f"below time.dt_min {self.dt_min:.3e} s")
+        # One reduction: the step, the fail, stop and checkpoint flags, the effects' minima
         red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0, self.local_stop,
-                        self.local_ckpt])
+                        self.local_ckpt] + [-e.step_minimum(self) for e in self.minima])
         self.comm.Allreduce(MPI.IN_PLACE, red, op=MPI.MAX)
+        for e, value in zip(self.minima, red[4:], strict=True):
+            e.set_step_minimum(self, -value)
         self.stop_requested = self.stop_requested or red[2] > 0
         self.checkpoint_requested = self.checkpoint_requested or red[3] > 0
         self.local_ckpt = 0.0
@@ -349,6 +358,12 @@ class Simulation:
         dt_stable = -red[0]
         # No clipping to output times: an abrupt change of dt would spoil the energy identity
         return min(self.safety * dt_stable, self.dt_max)
+
+    def refresh_minima(self):
+        """The effects' step minima of the present state, each with a reduction of its own:
+        after a restart or a rollback, where no step has ended (collective)."""
+        for e in self.minima:
+            e.set_step_minimum(self, global_min(self.comm, e.step_minimum(self)))
 
     def contact_force_array(self):
         """Zeroed contact forces of the store's nodes; shape (0, 2) without contact."""

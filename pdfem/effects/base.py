@@ -8,6 +8,8 @@ contact forces, ``heat`` (step 6), ``stable_dt`` for its limit on the step, and
 A disabled effect is never constructed, so it allocates nothing and runs no kernel.
 """
 
+import numpy as np
+
 
 class Effect:
     """Base class: every hook is a no-op; subclasses override the ones they use."""
@@ -33,6 +35,17 @@ class Effect:
 
     def heat(self, sim):
         """Step 6 of the loop: advance the temperatures over sim.dt."""
+
+    def step_minimum(self, sim):
+        """A local quantity this effect needs as its minimum over every rank at the next step
+        (np.inf: none). It travels in the time step's reduction at the end of each step
+        (:meth:`pdfem.solver.Simulation.next_dt`), so it costs no collective of its own;
+        :meth:`set_step_minimum` receives the result. An effect that overrides this is
+        listed once at set-up."""
+        return np.inf
+
+    def set_step_minimum(self, sim, value):
+        """Receive the global minimum of :meth:`step_minimum`."""
 
     def energy_terms(self, sim, out):
         """Add per-body energy terms of this effect: out maps term name -> (nb_own,) array."""

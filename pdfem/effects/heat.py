@@ -37,7 +37,6 @@ thermal strain) are reported beside the balance, not in it.
 import math
 
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.effects.base import Effect
 from pdfem.effects.thermal import fill_column
@@ -105,6 +104,8 @@ class Heat(Effect):
         self.gamma = 0.0
         self.thermoelastic = False
         self.nsub = 1
+        # Global conduction stable step of the last step's end (set with the time step)
+        self.cond_dt = np.inf
 
     def setup(self, sim):
         s = sim.store
@@ -181,11 +182,21 @@ class Heat(Effect):
                 hold_temperature(s.T, s.tcap, s.tfix, s.tfixv, s.node_body, s.nn_own, s.hacc,
                                  HACC_BC)
 
-    def _substeps(self, sim, dt):
-        """Equal conduction sub-steps within dt, from the global conduction limit."""
+    def step_minimum(self, sim):
+        """The local conduction stable step (with [conduction]): its global minimum comes back
+        with the time step's reduction and sets the next step's sub-steps."""
+        if not self.conduction:
+            return np.inf
         s = sim.store
-        loc = conduction_stable_dt(s.x, s.conn, s.emat, sim.mat_params, 0, s.ne_own)
-        lim = sim.comm.allreduce(loc, op=MPI.MIN) * sim.safety
+        return conduction_stable_dt(s.x, s.conn, s.emat, sim.mat_params, 0, s.ne_own)
+
+    def set_step_minimum(self, sim, value):
+        self.cond_dt = value
+
+    def _substeps(self, sim, dt):
+        """Equal conduction sub-steps within dt, from the global conduction limit of the
+        positions at the end of the last step (set with the time step)."""
+        lim = self.cond_dt * sim.safety
         nsub = 1 if lim >= dt else math.ceil(dt / lim)
         if nsub > NSUB_MAX:
             sim.fail(f"check conduction sub-steps: heat conduction needs {nsub} sub-steps of "

@@ -21,6 +21,11 @@ def world():
     return comm
 
 
+def global_min(comm, value):
+    """The least of a float over every rank."""
+    return comm.allreduce(float(value), op=MPI.MIN) if comm.size > 1 else float(value)
+
+
 def alltoallv(comm, bufs):
     """Send bufs[r] (float64 arrays) to rank r; return the list of buffers received."""
     size = comm.size

@@ -1,0 +1,67 @@
+"""Which collectives a step makes: counted through a communicator that records every
+collective call and the function that made it.
+
+Run under ``mpirun -n 2 python -m pytest --with-mpi tests/mpi``.
+"""
+
+import sys
+from collections import Counter
+
+import pytest
+from mpi4py import MPI
+
+from pdfem.scene import parse_scene
+from pdfem.solver import Simulation
+from tests.mpi.collective import assert_all
+from tests.scenes import settling_bed
+
+COLLECTIVES = {"allreduce", "Allreduce", "allgather", "Allgather", "Allgatherv", "alltoall",
+               "Alltoall", "Alltoallv", "bcast", "Bcast", "gather", "Gather", "Gatherv",
+               "Barrier", "barrier", "reduce", "Reduce", "scatter", "Scatter", "scan", "exscan"}
+
+
+class CountingComm:
+    """A communicator that counts its collective calls by (caller, method)."""
+
+    def __init__(self, comm):
+        self._comm = comm
+        self.calls = Counter()
+
+    def __getattr__(self, name):
+        attr = getattr(self._comm, name)
+        if name not in COLLECTIVES:
+            return attr
+
+        def counted(*args, **kwargs):
+            self.calls[(sys._getframe(1).f_code.co_name, name)] += 1
+            return attr(*args, **kwargs)
+
+        return counted
+
+
+@pytest.mark.mpi(min_size=2)
+def test_a_step_reduces_once_besides_the_rebuild_flag(tmp_path):
+    """A settling bed with heat conduction, no blocks: a step that does not rebuild makes two
+    collectives, the time step's reduction (which also carries the conduction limit) and the
+    rebuild flag; steps that rebuild add the migration's."""
+    heat = "[heat]\ninitial = 300.0\n[conduction]\n"
+    text = settling_bed(n=60, cols=10, partition="strips", extra=heat)
+    text = text.replace("shear = 4.4e9", "shear = 4.4e9\nspecific_heat = 1000.0\n"
+                        "conductivity = 1.0e6", 1)
+    comm = CountingComm(MPI.COMM_WORLD)
+    sim = Simulation(parse_scene(text, str(tmp_path)), comm)
+    plain = rebuilds = 0
+    for _ in range(1500):
+        comm.calls.clear()
+        sim.step()
+        calls = dict(comm.calls)
+        if ("neighbourhood", "allreduce") in calls and len(calls) > 2:
+            rebuilds += 1
+            continue
+        plain += 1
+        assert_all(MPI.COMM_WORLD, calls == {("next_dt", "Allreduce"): 1,
+                                             ("neighbourhood", "allreduce"): 1},
+                   f"step {sim.nstep}: {calls}")
+    # Conduction was sub-cycled (its limit came with the time step), and steps rebuilt
+    assert_all(MPI.COMM_WORLD, plain > 1000 and rebuilds > 0 and sim.heat.nsub > 1,
+               f"{plain} plain steps, {rebuilds} rebuilds, {sim.heat.nsub} sub-steps")

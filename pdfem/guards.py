@@ -111,7 +111,7 @@ class Guards:
         sim.stop_requested = False
         for eff in sim.effects:
             eff.after_rebuild(sim)
-        sim.refresh_minima()
+        sim.refresh_reductions()
         return dict(snap.driver)
 
     def can_retry(self):

@@ -26,13 +26,13 @@ from pdfem.guards import Guards, contact_stiffness_cap
 from pdfem.kernels.checks import first_nonfinite
 from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2
 from pdfem.kernels.element_measures import q4_lumped_mass
-from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, max_displacement2
+from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, moves_half_skin
 from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
 from pdfem.mesh.quality import corner_jacobians
 from pdfem.parallel.exchange import owned_grain_cells, rebuild
-from pdfem.parallel.mpi import global_min
+from pdfem.parallel.mpi import global_any, global_min
 from pdfem.store import NODE, Batch, Field, Store, core_fields
 from pdfem.timers import Timers
 
@@ -111,7 +111,7 @@ class Simulation:
             self.safety = min(self.safety, st.get("safety", self.safety))
             self.guards.retries_left = min(self.guards.retries,
                                            st.get("dt_retries_left", self.guards.retries))
-            self.refresh_minima()
+            self.refresh_reductions()
             return
         # Forces at t = 0 and the first half step; energy accumulators from the t = 0 state
         initial_strain_work(self)
@@ -242,12 +242,10 @@ class Simulation:
         self.advance_velocities()
 
     def neighbourhood(self):
-        """Rebuild ghosts and migrate when any node moved more than half the skin."""
+        """Rebuild ghosts and migrate when the last step's reduction said that this step's
+        position update may move a node half the skin (:meth:`next_dt`)."""
         s = self.store
-        # Only grains decide: global bodies are on every rank and never migrate
-        moved = max_displacement2(s.x, s.xref, s.nn_global, s.nn_own) > (0.5 * self.skin) ** 2
-        flag = self.comm.allreduce(int(moved), op=MPI.MAX)
-        if flag:
+        if self.rebuild_next:
             with self.timers.phase("migration"):
                 self._rebalance()
                 self.store, self.halo = rebuild(self.comm, s, self.grid, self.owner,
@@ -343,11 +341,18 @@ class Simulation:
                 limiter = limiter.dt_limiter(self, dt_loc)
             self.fail(f"check time step: the stable dt {dt_loc:.3e} s (limited by {limiter}) is "
                       f"below time.dt_min {self.dt_min:.3e} s")
-        # One reduction: the step, the fail, stop and checkpoint flags, the effects' minima
+        # Whether the next step's position update may move a grain node half the skin: the
+        # next step is at most this rank's limit, so a bound decides before the reduction
+        dt_up = min(self.safety * dt_loc, self.dt_max)
+        ahead = self._moves_half_skin(dt_up, 0.5 * (self.dt_prev + dt_up))
+        # One reduction: the step, the fail, stop, checkpoint and rebuild flags, the effects'
+        # minima
         red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0, self.local_stop,
-                        self.local_ckpt] + [-e.step_minimum(self) for e in self.minima])
+                        self.local_ckpt, float(ahead)]
+                       + [-e.step_minimum(self) for e in self.minima])
         self.comm.Allreduce(MPI.IN_PLACE, red, op=MPI.MAX)
-        for e, value in zip(self.minima, red[4:], strict=True):
+        self.rebuild_next = bool(red[4] > 0)
+        for e, value in zip(self.minima, red[5:], strict=True):
             e.set_step_minimum(self, -value)
         self.stop_requested = self.stop_requested or red[2] > 0
         self.checkpoint_requested = self.checkpoint_requested or red[3] > 0
@@ -359,9 +364,18 @@ class Simulation:
         # No clipping to output times: an abrupt change of dt would spoil the energy identity
         return min(self.safety * dt_stable, self.dt_max)
 
-    def refresh_minima(self):
-        """The effects' step minima of the present state, each with a reduction of its own:
-        after a restart or a rollback, where no step has ended (collective)."""
+    def _moves_half_skin(self, dt_next, dt_avg):
+        """This rank's bound: may the next position update move an owned grain node half the
+        skin from where it was at the last rebuild (global bodies never migrate)?"""
+        s = self.store
+        return moves_half_skin(s.x, s.xref, s.v, self.f, s.m, s.bcf, s.bcv, s.nn_global,
+                               s.nn_own, dt_next, dt_avg, 0.5 * self.skin)
+
+    def refresh_reductions(self):
+        """What the time step's reduction carries, for a state whose step has not ended
+        through :meth:`next_dt` (after a restart or a rollback: v is already the next half
+        step's, dt the next step's), each with a reduction of its own (collective)."""
+        self.rebuild_next = global_any(self.comm, self._moves_half_skin(self.dt, 0.0))
         for e in self.minima:
             e.set_step_minimum(self, global_min(self.comm, e.step_minimum(self)))
 

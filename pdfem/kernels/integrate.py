@@ -117,16 +117,33 @@ def potential_energy(x, m, gx, gy, node_body, n1, out):
 
 
 @njit(cache=True)
-def max_displacement2(x, xref, n0, n1):
-    """Largest squared distance of nodes [n0, n1) from their positions at the last rebuild."""
-    d2 = 0.0
+def moves_half_skin(x, xref, v, f, m, bcf, bcv, n0, n1, dt_next, dt_avg, half_skin):
+    """True when the next position update may take a node of [n0, n1) farther than
+    half_skin from its position at the last rebuild.
+
+    The update is x + dt v' with dt <= dt_next and v' = c1 v + c2 f / m (advance_velocities:
+    |c1| <= 1 and 0 <= c2 <= dt_avg for damping gamma >= 0), or the prescribed velocity bcv
+    (bcf 2), or 0 (bcf 1). So |x' - xref| <= |x - xref| + dt_next |v'| with each component
+    of v' bounded by |v| + dt_avg |f| / m; the bound is compared with a relative margin of
+    1e-9 that covers the rounding of the update. dt_avg = 0 bounds a state whose v is
+    already the next half step's (after a restart or a rollback).
+    """
     for i in range(n0, n1):
+        b2 = 0.0
+        for k in range(2):
+            if bcf[i, k] == 0:
+                vk = abs(v[i, k]) + dt_avg * abs(f[i, k]) / m[i]
+            elif bcf[i, k] == 2:
+                vk = max(abs(bcv[i, k]), abs(v[i, k]))
+            else:
+                vk = abs(v[i, k])
+            b2 += vk * vk
         dx = x[i, 0] - xref[i, 0]
         dy = x[i, 1] - xref[i, 1]
-        r = dx * dx + dy * dy
-        if r > d2:
-            d2 = r
-    return d2
+        d = np.sqrt(dx * dx + dy * dy) + dt_next * np.sqrt(b2)
+        if d * (1.0 + 1e-9) > half_skin:
+            return True
+    return False
 
 
 @njit(cache=True)

@@ -26,6 +26,11 @@ def global_min(comm, value):
     return comm.allreduce(float(value), op=MPI.MIN) if comm.size > 1 else float(value)
 
 
+def global_any(comm, flag):
+    """True when the flag is true on any rank."""
+    return bool(comm.allreduce(int(bool(flag)), op=MPI.MAX)) if comm.size > 1 else bool(flag)
+
+
 def alltoallv(comm, bufs):
     """Send bufs[r] (float64 arrays) to rank r; return the list of buffers received."""
     size = comm.size

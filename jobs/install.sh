@@ -24,7 +24,7 @@ python -m pip install -q --upgrade pip >/dev/null
 python -m pip install -q mpi4py numpy numba meshio pytest pytest-mpi hypothesis \
   matplotlib ruff "setuptools>=77" "cython>=3" pkgconfig wheel
 
-# h5py against parallel HDF5 (no build isolation: see README)
+# h5py against parallel HDF5 (no build isolation: see docs/user/running.md, Install)
 if ! python -c "import h5py, sys; sys.exit(0 if h5py.get_config().mpi else 1)" 2>/dev/null; then
   CC=mpicc HDF5_MPI=ON HDF5_PKGCONFIG_NAME=hdf5-openmpi \
     python -m pip install -q --no-binary=h5py --no-build-isolation --force-reinstall --no-deps h5py

@@ -12,7 +12,7 @@ import pytest
 from pdfem.errors import InputError
 from pdfem.scene import geometry as geo
 from pdfem.scene import load_scene, parse_scene
-from pdfem.scene.reference import markdown
+from pdfem.scene.reference import pages
 from pdfem.scene.toml_out import dumps
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -185,12 +185,25 @@ def test_grains_npz(tmp_path):
 
 
 def test_reference_doc_is_current():
-    """docs/scene-reference.md is generated: python -m pdfem.scene.reference > it; the README
-    holds the same text (python -m pdfem.scene.reference --readme)."""
-    from pdfem.scene.reference import readme_body, readme_section
+    """docs/scene/ is generated (python -m pdfem.scene.reference --out docs/scene): every page
+    on disk is the generated one, and there is no page the schema does not generate."""
+    folder = ROOT / "docs" / "scene"
+    generated = pages()
+    assert sorted(p.name for p in folder.iterdir()) == sorted(generated)
+    for name, text in generated.items():
+        assert (folder / name).read_text() == text, f"docs/scene/{name} is out of date"
 
-    assert (ROOT / "docs" / "scene-reference.md").read_text() == markdown()
-    assert readme_section((ROOT / "README.md").read_text()) == readme_body()
+
+def test_reference_pages_cover_the_schema():
+    """One page per table of the schema, and each page lists every key of its table."""
+    from pdfem.scene import schema as S
+
+    generated = pages()
+    for sec in S.SECTIONS:
+        page = generated[f"{sec.name}.md"]
+        for key in sec.keys:
+            assert f"| `{key}` |" in page, (sec.name, key)
+        assert f"({sec.name}.md)" in generated["README.md"]
 
 
 # ---------------------------------------------------------------- mistakes

@@ -9,8 +9,8 @@ strips. Two runs of the same bed:
 - with a skin of 1e-12 m, so that every step is a rebuild: the cost of one migration.
 
 Per phase the slowest rank's time is taken (it sets the pace). Figures: halo and migration
-as fractions of the step; the halo cost per boundary cell of a rank (the input of the README's
-scaling model); the same ranks' load imbalance. Printed on rank 0.
+as fractions of the step; the halo cost per boundary cell of a rank (the input of the
+scaling model in docs/performance.md); the same ranks' load imbalance. Printed on rank 0.
 """
 
 import statistics

@@ -6,7 +6,7 @@ spots (connected hot regions) with their size, peak, site and heating mechanism;
 run also the temperature against time since the front arrived. Writes
 ``<prefix>-hotspots.csv``, ``-hotspots-spots.csv``, ``-hotspots.json``,
 ``-hotspots-front.csv`` (shock runs) and the figures (definitions:
-:mod:`pdfem.analysis.hotspots`, docs/hotspots.md).
+:mod:`pdfem.analysis.hotspots`, docs/validation/hotspots.md).
 """
 
 import math

@@ -22,7 +22,8 @@ child stuck in the library, even when the command is gone), and answers ``pid N`
 ``done STATUS``; it ends when its input closes, with the command.
 
 Cost and limits, measured on the 2-vCPU machine loaded 12-15 deep by other work
-(docs/fuzzing.md, "Damaged metadata"): the first check costs the helper's start, 0.7-0.9 s;
+(docs/validation/fuzzing.md, "Damaged metadata"): the first check costs the helper's start,
+0.7-0.9 s;
 a later one 0.05-0.18 s on a shock run file of the test suite (51 steps) and 7.1-14.2 s on a
 310 MB run file with 2000 gauges (8031 datasets, 2004 groups: 10 036 steps, the slowest
 0.49 s). TIMEOUT = 10 s a step and WALL = 600 s a file leave margins of 20 and 40 over those.

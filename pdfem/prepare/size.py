@@ -8,7 +8,7 @@ about packing W H / (unit E[a^2] E[b/a]) grains, the count of
 :func:`pdfem.prepare.geometric.draw_grains` in expectation (219.6 for the packaged
 shot912_prepare.toml, which draws 218).
 
-The limits, from the preparation's cost on the 2-vCPU machine (docs/fuzzing.md, "Absurdly
+The limits, from the preparation's cost on the 2-vCPU machine (docs/validation/fuzzing.md, "Absurdly
 large preparations"), are where the estimate passes about an hour:
 
 - geometric, serial on rank 0: 2-3 ms a grain at level 1 with the default 200 sweeps, the

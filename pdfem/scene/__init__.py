@@ -3,8 +3,8 @@
 ``load_scene(path)`` and ``parse_scene(text_or_dict, base_dir)`` return a :class:`Scene`;
 every problem raises :class:`~pdfem.errors.InputError` with a one-line message naming the
 file and the key path (``bed.toml: time.end: must be > 0 (got -1.0)``). The schema itself
-lives in :mod:`pdfem.scene.schema`; docs/scene-reference.md is generated from it by
-``python -m pdfem.scene.reference``.
+lives in :mod:`pdfem.scene.schema`; docs/scene/ is generated from it by
+``python -m pdfem.scene.reference --out docs/scene``.
 """
 
 import math

@@ -1,8 +1,8 @@
-"""The scene-file reference (docs/scene-reference.md), generated from the schema tables.
+"""The scene-file reference (docs/scene/), generated from the schema tables.
 
-``python -m pdfem.scene.reference > docs/scene-reference.md`` regenerates it and
-``python -m pdfem.scene.reference --readme`` rewrites the same text between the README's
-scene-reference markers; a test checks both, so the documentation cannot drift from the code.
+``python -m pdfem.scene.reference --out docs/scene`` writes one page per table,
+``docs/scene/<table>.md``, and the index ``docs/scene/README.md``; a test checks that the pages
+on disk are exactly these, so the documentation cannot drift from the code.
 """
 
 import math
@@ -34,6 +34,8 @@ grains, no grain and block, and no two blocks overlap (blocks may touch). Grains
 polygons of 64 points on the ellipse inflated by a relative 1e-9, so touching grains count
 as overlapping.
 """
+
+
 
 
 def _default(key):
@@ -71,58 +73,112 @@ def _heading(sec):
             "named": f"[{sec.name}.NAME]"}[sec.form]
 
 
-def markdown():
-    """The whole reference as Markdown text."""
-    lines = [_INTRO]
-    for sec in S.SECTIONS:
-        tags = [t for t, on in (("required", sec.required),
-                                ("effect", sec.name in S.PRESENCE_TABLES
-                                 and sec.name not in ("walls", "grains_file")))
-                if on]
-        suffix = f" ({', '.join(tags)})" if tags else ""
-        lines += [f"## `{_heading(sec)}`{suffix}", "", sec.doc, ""] + _rows(sec.keys) + [""]
-        # Per-model material keys and contact pairs
-        if sec.name == "materials":
-            for model, keys in S.MATERIAL_MODELS.items():
-                if keys:
-                    lines += [f'### `[materials.NAME]` with `model = "{model}"`', "",
-                              "Additional keys of this model (keys of other models are "
-                              "errors).", ""] + _rows(keys) + [""]
-        if sec.name == "contact":
-            lines += ['### `[contact.pairs."mat1:mat2"]`', "",
-                      "Overrides for contacts between two materials (either order, each "
-                      "pair once).", ""] + _rows(S.CONTACT_PAIR) + [""]
+# Where each table's physics or use is explained (paths relative to docs/scene/)
+READING = {
+    "domain": [("the step and the domain decomposition", "../theory/step.md")],
+    "time": [("the step and its stable time step", "../theory/step.md")],
+    "element": [("the element", "../theory/element.md")],
+    "gravity": [("the step", "../theory/step.md")],
+    "damping": [("the step", "../theory/step.md")],
+    "bulk_viscosity": [("bulk viscosity", "../theory/element.md")],
+    "materials": [("the cap model", "../theory/cap.md")],
+    "grains": [("scenes by example", "../user/scenes.md")],
+    "grains_file": [("scenes by example", "../user/scenes.md"),
+                    ("preparing a bed", "../user/prepare.md")],
+    "blocks": [("scenes by example", "../user/scenes.md")],
+    "bc": [("scenes by example", "../user/scenes.md")],
+    "walls": [("contact", "../theory/contact.md")],
+    "contact": [("contact", "../theory/contact.md"),
+                ("the energy balance", "../theory/energy.md")],
+    "heat": [("heat", "../theory/heat.md")],
+    "conduction": [("heat", "../theory/heat.md")],
+    "dissipation_heating": [("heat", "../theory/heat.md"),
+                            ("the energy balance", "../theory/energy.md")],
+    "viscous_heating": [("heat", "../theory/heat.md"),
+                        ("the energy balance", "../theory/energy.md")],
+    "thermoelastic": [("heat", "../theory/heat.md"),
+                      ("the energy balance", "../theory/energy.md")],
+    "thermal_expansion": [("heat", "../theory/heat.md"),
+                          ("the energy balance", "../theory/energy.md")],
+    "temperature_dependence": [("heat", "../theory/heat.md")],
+    "contact_conductance": [("heat", "../theory/heat.md")],
+    "friction_heating": [("heat", "../theory/heat.md"),
+                         ("the energy balance", "../theory/energy.md")],
+    "thermal_bc": [("heat", "../theory/heat.md")],
+    "gauges": [("the run file", "../user/output.md")],
+    "shock": [("shot 912: how the wave is measured", "../validation/shot912.md")],
+    "prepare": [("preparing a bed", "../user/prepare.md")],
+    "output": [("the run file", "../user/output.md"),
+               ("checkpoints and restarts", "../user/checkpoints.md")],
+    "guards": [("guards and remedies", "../validation/hard-cases.md"),
+               ("bad input and exit codes", "../user/bad-input.md")],
+    "run": [],
+}
+
+
+def _title(sec):
+    """``[name]`` with its tags: (required), (effect)."""
+    tags = [t for t, on in (("required", sec.required),
+                            ("effect", sec.name in S.PRESENCE_TABLES
+                             and sec.name not in ("walls", "grains_file")))
+            if on]
+    suffix = f" ({', '.join(tags)})" if tags else ""
+    return f"`{_heading(sec)}`{suffix}"
+
+
+def _page(sec):
+    """The page of one table: its doc, its keys, its sub-tables, where to read more."""
+    lines = [f"# {_title(sec)}", "",
+             "Generated from `pdfem/scene/schema.py` by `python -m pdfem.scene.reference "
+             "--out docs/scene`; [all tables](README.md).", "",
+             sec.doc, ""] + _rows(sec.keys) + [""]
+    # Per-model material keys and contact pairs
+    if sec.name == "materials":
+        for model, keys in S.MATERIAL_MODELS.items():
+            if keys:
+                lines += [f'## `[materials.NAME]` with `model = "{model}"`', "",
+                          "Additional keys of this model (keys of other models are "
+                          "errors).", ""] + _rows(keys) + [""]
+    if sec.name == "contact":
+        lines += ['## `[contact.pairs."mat1:mat2"]`', "",
+                  "Overrides for contacts between two materials (either order, each "
+                  "pair once).", ""] + _rows(S.CONTACT_PAIR) + [""]
+    links = READING[sec.name]
+    if links:
+        lines += ["Read more: " + ", ".join(f"[{t}]({u})" for t, u in links) + "."]
     return "\n".join(lines).rstrip("\n") + "\n"
 
 
-# The README section the reference is copied into
-README_BEGIN = ("<!-- scene-reference:begin (generated: python -m pdfem.scene.reference "
-                "--readme) -->")
-README_END = "<!-- scene-reference:end -->"
+def _index():
+    """docs/scene/README.md: the rules every scene obeys and the list of tables."""
+    lines = [_INTRO.rstrip("\n"), "",
+             "Generated from `pdfem/scene/schema.py` by `python -m pdfem.scene.reference "
+             "--out docs/scene`. Examples of whole scenes: [scenes by example]"
+             "(../user/scenes.md).", "",
+             "| table | what it is |", "|---|---|"]
+    for sec in S.SECTIONS:
+        first = sec.doc.split(". ")[0].rstrip(".").replace("|", "\\|")
+        lines.append(f"| [{_title(sec)}]({sec.name}.md) | {first}. |")
+    return "\n".join(lines) + "\n"
 
 
-def readme_section(text):
-    """The generated part of a README text (between the markers), or None."""
-    if README_BEGIN not in text or README_END not in text:
-        return None
-    return text.split(README_BEGIN, 1)[1].split(README_END, 1)[0]
-
-
-def readme_body():
-    """What goes between the README markers: the reference, its headings one level down."""
-    lines = markdown().splitlines()[1:]
-    return "\n" + "\n".join("#" + ln if ln.startswith("#") else ln for ln in lines) + "\n"
+def pages():
+    """Every page of the reference: file name in docs/scene/ -> Markdown text."""
+    out = {"README.md": _index()}
+    for sec in S.SECTIONS:
+        out[f"{sec.name}.md"] = _page(sec)
+    return out
 
 
 if __name__ == "__main__":
-    import sys
+    import argparse
     from pathlib import Path
 
-    if sys.argv[1:] == ["--readme"]:
-        path = Path(__file__).resolve().parents[2] / "README.md"
-        text = path.read_text()
-        head, rest = text.split(README_BEGIN, 1)
-        tail = rest.split(README_END, 1)[1]
-        path.write_text(head + README_BEGIN + readme_body() + README_END + tail)
-    else:
-        print(markdown(), end="")
+    ap = argparse.ArgumentParser(prog="python -m pdfem.scene.reference",
+                                 description="write the scene reference, one page per table")
+    ap.add_argument("--out", required=True, type=Path,
+                    help="folder of the pages (docs/scene); existing pages are replaced")
+    args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+    for name, text in pages().items():
+        (args.out / name).write_text(text)

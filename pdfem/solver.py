@@ -18,7 +18,7 @@ from partition import CellGrid, needs_rebalance, partition
 from pdfem import build
 from pdfem.drive import Drives
 from pdfem.effects import active_effects
-from pdfem.effects.base import Effect
+from pdfem.effects.base import hook_table
 from pdfem.effects.contact import check_contact_scene
 from pdfem.energy import energy_floor, initial_strain_work
 from pdfem.errors import InputError, SimulationError
@@ -87,9 +87,9 @@ class Simulation:
             self._build_restart(restart)
         for eff in self.effects:
             eff.setup(self)
-        # Effects whose step_minimum travels with the time step's reduction
-        self.minima = [e for e in self.effects
-                       if type(e).step_minimum is not Effect.step_minimum]
+        # The effects that use each step hook, listed once
+        self.hooks = hook_table(self.effects)
+        self.minima = self.hooks["step_minimum"]
         self.drives = Drives(self)
         self.guards = Guards(self)
         self._cap_contact(restart)
@@ -98,6 +98,8 @@ class Simulation:
         trim()
         self._fail_msg = ""
         self.t, self.nstep = 0.0, 0
+        # No step has a length before the first next_dt: set-up evaluates forces at dt = 0
+        self.dt = self.dt_prev = 0.0
         self.du = np.zeros_like(self.store.v)
         self.f = np.zeros_like(self.store.v)
         self.kin = np.zeros(self.store.nbody)
@@ -116,9 +118,8 @@ class Simulation:
         # Forces at t = 0 and the first half step; energy accumulators from the t = 0 state
         initial_strain_work(self)
         self.compute_forces()
-        for eff in self.effects:
-            if hasattr(eff, "start_work"):
-                eff.start_work(self)
+        for eff in self.hooks["start_work"]:
+            eff.start_work(self)
         self.dt_prev = 0.0
         self.dt = self.next_dt()
         self.advance_velocities(first=True)
@@ -234,7 +235,7 @@ class Simulation:
         # 3-5. internal, contact and body forces
         self.compute_forces()
         # 6. heat
-        for eff in self.effects:
+        for eff in self.hooks["heat"]:
             eff.heat(self)
         # 7. next dt, velocities, diagnostics
         self.dt_prev = self.dt
@@ -284,7 +285,7 @@ class Simulation:
         """Residual force f = P - I on owned nodes: elements, contact, body forces."""
         s = self.store
         self.f[:] = 0.0
-        for eff in self.effects:
+        for eff in self.hooks["before_elements"]:
             eff.before_elements(self)
         with self.timers.phase("elements"):
             bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
@@ -295,11 +296,10 @@ class Simulation:
         if self.has_contact:
             # The contacts' forces go to fc (their work is accounted per body), then to f
             self.fc[:] = 0.0
-            for eff in self.effects:
-                if hasattr(eff, "contact_forces"):
-                    eff.contact_forces(self)
+            for eff in self.hooks["contact_forces"]:
+                eff.contact_forces(self)
             self.f += self.fc
-        for eff in self.effects:
+        for eff in self.hooks["body_force"]:
             eff.body_force(self)
         self._check_finite()
 
@@ -331,11 +331,10 @@ class Simulation:
         s = self.store
         dt_loc = q4_stable_dt(s.x, s.conn, s.emat, self.mat_params, 0, s.ne_own)
         limiter = "the element wave speed"
-        for eff in self.effects:
-            if hasattr(eff, "stable_dt"):
-                d = eff.stable_dt(self)
-                if d < dt_loc:
-                    dt_loc, limiter = d, eff
+        for eff in self.hooks["stable_dt"]:
+            d = eff.stable_dt(self)
+            if d < dt_loc:
+                dt_loc, limiter = d, eff
         if not dt_loc > self.dt_min and not self._fail_msg:
             if not isinstance(limiter, str):
                 limiter = limiter.dt_limiter(self, dt_loc)

@@ -1,10 +1,13 @@
 """What an effect is: a scene table that, when present, adds arrays and kernel calls.
 
-An effect plugs into named points of the step (see :mod:`pdfem.solver`): ``setup`` once,
-``after_rebuild`` when ghosts and contact candidates were rebuilt, ``before_elements`` ahead of
-the internal forces, ``contact_forces`` (contact), ``body_force`` after the internal and
-contact forces, ``heat`` (step 6), ``stable_dt`` for its limit on the step, and
-``energy_terms`` for its terms of the balance.
+An effect plugs into named points of the step (see :mod:`pdfem.solver`), every one declared
+here as a no-op: ``setup`` once, ``start_work`` at t = 0 of a new run, ``after_rebuild`` when
+ghosts and contact candidates were rebuilt, ``before_elements`` ahead of the internal forces,
+``contact_forces`` (contact), ``body_force`` after the internal and contact forces, ``heat``
+(step 6), ``stable_dt`` for its limit on the step (with ``dt_limiter`` to name it),
+``step_minimum`` for a quantity reduced with the time step, and ``energy_terms`` for its
+terms of the balance. The solver lists once, at set-up, the effects that override each step
+hook (:func:`hook_table`, like LAMMPS's ``setmask``), so a hook no effect uses costs nothing.
 A disabled effect is never constructed, so it allocates nothing and runs no kernel.
 """
 
@@ -36,6 +39,21 @@ class Effect:
     def heat(self, sim):
         """Step 6 of the loop: advance the temperatures over sim.dt."""
 
+    def start_work(self, sim):
+        """At t = 0 of a new run (not a restart), after the first forces."""
+
+    def contact_forces(self, sim):
+        """Add the contacts' forces into sim.fc for owned nodes."""
+
+    def stable_dt(self, sim):
+        """This rank's limit on the next time step [s] (np.inf: none)."""
+        return np.inf
+
+    def dt_limiter(self, sim, dt):
+        """Words naming what limits this effect's stable step to dt (for the time.dt_min
+        error)."""
+        return self.name
+
     def step_minimum(self, sim):
         """A local quantity this effect needs as its minimum over every rank at the next step
         (np.inf: none). It travels in the time step's reduction at the end of each step
@@ -49,3 +67,14 @@ class Effect:
 
     def energy_terms(self, sim, out):
         """Add per-body energy terms of this effect: out maps term name -> (nb_own,) array."""
+
+
+# The hooks of the step the solver calls through hook_table's lists
+STEP_HOOKS = ("before_elements", "contact_forces", "body_force", "heat", "stable_dt",
+              "step_minimum", "start_work")
+
+
+def hook_table(effects):
+    """{hook: the effects, in order, whose class overrides it} for every step hook."""
+    return {hook: [e for e in effects if getattr(type(e), hook) is not getattr(Effect, hook)]
+            for hook in STEP_HOOKS}

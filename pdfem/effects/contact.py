@@ -277,7 +277,7 @@ class Contact(Effect):
 
     def _evaluate(self, sim, cand):
         s = sim.store
-        dt = getattr(sim, "dt", 0.0)
+        dt = sim.dt
         # Without blocks every contact is local and in key order: the pass adds the forces (all
         # of them, also those whose rows did not fit: a second call only writes the rows)
         added = sim.nglobal == 0
@@ -320,7 +320,7 @@ class Contact(Effect):
         s = sim.store
         # Heat of each contact on its two sides (this step, over sim.dt), its friction part,
         # and the elements of the two sides (-1: a wall)
-        heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and hasattr(sim, "dt")
+        heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and sim.dt > 0.0
         q = None
         if heat:
             q = np.zeros((active.shape[0], 4))

@@ -24,13 +24,13 @@ class BulkViscosity(Effect):
         s = sim.store
         with sim.timers.phase("elements"):
             bulk_viscosity_forces(s.x, sim.du, s.conn, s.emat, sim.mat_params, 0, s.ne_own,
-                                  getattr(sim, "dt", 0.0), self.c_quad, self.c_lin, s.qv, s.ewq,
+                                  sim.dt, self.c_quad, self.c_lin, s.qv, s.ewq,
                                   sim.f)
 
     def stable_dt(self, sim):
         s = sim.store
         return bulk_viscosity_dt(s.x, sim.du, s.conn, s.emat, sim.mat_params, 0, s.ne_own,
-                                 getattr(sim, "dt", 0.0), self.c_quad, self.c_lin)
+                                 sim.dt, self.c_quad, self.c_lin)
 
     def dt_limiter(self, sim, dt):
         return "the element wave speed with bulk viscosity"

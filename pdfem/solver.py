@@ -54,6 +54,9 @@ class Simulation:
         check_contact_scene(r)
         self.effects = active_effects(r, scene)
         self.effect_names = [e.name for e in self.effects]
+        # The temperature field's owner (None without [heat]): the handle the contact heat
+        # and the diagnostics use
+        self.heat = next((e for e in self.effects if e.name == "heat"), None)
         damping = [e for e in self.effects if e.name == "damping"]
         self.gamma = damping[0].gamma if damping else 0.0
         self.mat_params = build.material_table(r["materials"])

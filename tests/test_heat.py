@@ -268,7 +268,7 @@ def test_without_heat_no_temperature_exists(tmp_path):
     mat = PLAIN_M
     text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, out="cold.h5")
     sim = simulate(text, tmp_path)
-    assert not hasattr(sim.store, "T") and not hasattr(sim, "heat")
+    assert not hasattr(sim.store, "T") and sim.heat is None
     assert sim.effect_names == []
     run(sim, str(tmp_path / "cold.h5"), quiet=True)
     assert sim.timers.calls["heat"] == 0 and sim.timers.seconds["heat"] == 0.0

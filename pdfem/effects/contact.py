@@ -157,9 +157,11 @@ class Contact(Effect):
         self._wall_mu = np.array([w[2] for w in self.walls], float)
         self._wall_out = np.zeros((2, 1024), np.int64)
         self.friction = bool(self.law[:, :, L.P_MU].max() > 0 or any(w[2] > 0 for w in self.walls))
-        # Heat across contacts (set by the contact_conductance / friction_heating effects)
-        self.heat_h = 0.0
-        self.heat_fraction = 0.0
+        # Heat across contacts: its options [contact_conductance] and [friction_heating]
+        r = scene.resolved
+        self.heat_h = float(r["contact_conductance"]["h"]) if "contact_conductance" in r else 0.0
+        self.heat_fraction = (float(r["friction_heating"]["fraction"])
+                              if "friction_heating" in r else 0.0)
         self.gpairs = np.zeros((0, 2), np.int64)
         self._out = np.zeros((1024, 2), np.int64)
         self.cand = np.zeros((0, 2), np.int64)

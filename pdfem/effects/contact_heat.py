@@ -12,23 +12,15 @@ it does for forces, so the result is the same on any number of ranks:
 from pdfem.effects.base import Effect
 
 
-def _contact(sim):
-    return next(e for e in sim.effects if e.name == "contact")
-
-
 class ContactConductance(Effect):
-    """Heat flow across every active contact, proportional to its width."""
+    """Heat flow across every active contact, proportional to its width (an option of the
+    contact effect, which reads [contact_conductance] itself)."""
 
     name = "contact_conductance"
 
-    def setup(self, sim):
-        _contact(sim).heat_h = float(self.table["h"])
-
 
 class FrictionHeating(Effect):
-    """Frictional dissipation at contacts becomes heat on both contact edges."""
+    """Frictional dissipation at contacts becomes heat on both contact edges (an option of
+    the contact effect, which reads [friction_heating] itself)."""
 
     name = "friction_heating"
-
-    def setup(self, sim):
-        _contact(sim).heat_fraction = float(self.table["fraction"])

@@ -54,7 +54,7 @@ from pdfem.kernels.heat import (
     thermal_energy,
 )
 from pdfem.kernels.integrate import ACC_FRIC, body_sums
-from pdfem.kernels.params import ALPHA, CP, RHO, T_REF
+from pdfem.kernels.params import ALPHA, COND, CP, RHO, T_REF
 from pdfem.store import BODY, ELEM, NODE, Field
 
 # Columns of the per-body accumulator hacc
@@ -98,19 +98,27 @@ class Heat(Effect):
         self.couple_elements = any(k in scene.resolved for k in COUPLED)
         self.extra_fields = (FIELDS + (COUPLED_FIELDS if self.couple_elements else ())
                              + (VISCOUS_FIELDS if "viscous_heating" in scene.resolved else ()))
-        # Parts other effects switch on in their setup
-        self.conduction = False
-        self.beta = 0.0
-        self.gamma = 0.0
-        self.thermoelastic = False
+        # Its options: the tables of the heat effects that switch on a part of it
+        # (pdfem.effects.thermal), read here so that no effect configures another
+        r = scene.resolved
+        self.conduction = "conduction" in r
+        self.beta = float(r["dissipation_heating"]["beta"]) if "dissipation_heating" in r else 0.0
+        self.gamma = float(r["viscous_heating"]["fraction"]) if "viscous_heating" in r else 0.0
+        self.thermoelastic = "thermoelastic" in r
+        # The friction heating fraction ([friction_heating], an option of contact)
+        self.friction_heat = (float(r["friction_heating"]["fraction"])
+                              if "friction_heating" in r else 0.0)
         self.nsub = 1
         # Global conduction stable step of the last step's end (set with the time step)
         self.cond_dt = np.inf
 
     def setup(self, sim):
         s = sim.store
-        sim.heat = self
         fill_column(sim, CP, "specific_heat")
+        if self.conduction:
+            fill_column(sim, COND, "conductivity")
+        if self.thermoelastic:
+            fill_column(sim, ALPHA, "expansion")
         sim.mat_params[:, T_REF] = self.t_init
         if not sim.restarted:
             # Initial temperatures; lumped capacity: the lumped mass with rho c in place of rho
@@ -221,9 +229,8 @@ class Heat(Effect):
             viscous = np.empty(nb)
             body_sums(s.ewq[:ne], s.estart[:nb], s.ne[:nb], viscous)
             paid += self.gamma * viscous
-        fraction = self.friction_fraction(sim)
-        if fraction > 0.0:
-            paid += fraction * s.acc[:nb, ACC_FRIC]
+        if self.friction_heat > 0.0:
+            paid += self.friction_heat * s.acc[:nb, ACC_FRIC]
         out["heat_paid"] = paid
         if self.couple_elements:
             w = np.empty(nb)
@@ -239,11 +246,6 @@ class Heat(Effect):
                       s.ne[:nb], c)
             out["coupling"] = c
 
-    @staticmethod
-    def friction_fraction(sim):
-        """The friction heating fraction (0 without [friction_heating])."""
-        return next((float(e.heat_fraction) for e in sim.effects if e.name == "contact"
-                     and getattr(e, "heat_fraction", 0.0) > 0.0), 0.0)
 
 
 def _body_node_sums(val, node_body, n1, out):

@@ -1,8 +1,9 @@
 """The heat effects that switch on a part of [heat] (see pdfem.effects.heat).
 
 Each exists only when its scene table is present, and each needs [heat] (checked with the
-scene). They own no arrays of their own: at setup they fill the material columns their
-kernels read and tell the heat effect what to run.
+scene). They own no arrays and no step hooks: the first four are options of the heat effect,
+which reads their tables itself (pdfem.effects.heat.Heat); the last two fill the material
+columns the element kernels read.
 
     [conduction]              conduction within each body (materials' conductivity)
     [dissipation_heating]     beta x plastic work heats the element (report eq. 48)
@@ -13,7 +14,7 @@ kernels read and tell the heat effect what to run.
 """
 
 from pdfem.effects.base import Effect
-from pdfem.kernels.params import ALPHA, COND, SOFT_K, SOFT_Y
+from pdfem.kernels.params import ALPHA, SOFT_K, SOFT_Y
 
 
 def fill_column(sim, column, key, default=0.0):
@@ -23,45 +24,35 @@ def fill_column(sim, column, key, default=0.0):
 
 
 class Conduction(Effect):
-    """Heat conduction within bodies; sub-cycled when its limit is the tighter one."""
+    """Heat conduction within bodies; sub-cycled when its limit is the tighter one (an
+    option of the heat effect)."""
 
     name = "conduction"
 
-    def setup(self, sim):
-        fill_column(sim, COND, "conductivity")
-        sim.heat.conduction = True
-
 
 class DissipationHeating(Effect):
-    """A fraction beta of the plastic work becomes heat where it is done."""
+    """A fraction beta of the plastic work becomes heat where it is done (an option of the
+    heat effect)."""
 
     name = "dissipation_heating"
-
-    def setup(self, sim):
-        sim.heat.beta = float(self.table["beta"])
 
 
 class ViscousHeating(Effect):
     """A fraction of the work of the artificial bulk viscosity heats the element.
 
     The viscosity stands in for the dissipation a shock front does over a width the mesh
-    cannot resolve; that dissipation is heat, so a thermal run through a shock wants it.
+    cannot resolve; that dissipation is heat, so a thermal run through a shock wants it. An
+    option of the heat effect.
     """
 
     name = "viscous_heating"
 
-    def setup(self, sim):
-        sim.heat.gamma = float(self.table["fraction"])
-
 
 class Thermoelastic(Effect):
-    """Thermo-elastic coupling: heating under compression, cooling under expansion."""
+    """Thermo-elastic coupling: heating under compression, cooling under expansion (an option
+    of the heat effect)."""
 
     name = "thermoelastic"
-
-    def setup(self, sim):
-        fill_column(sim, ALPHA, "expansion")
-        sim.heat.thermoelastic = True
 
 
 class ThermalExpansion(Effect):

@@ -69,24 +69,23 @@ class Checkpointer:
             want = True
         return want
 
-    def write(self, frames, samples, gsched, gauges, writer, rows, ref):
-        """Close the frame segment being written, then write the checkpoint atomically
-        (collective): it lists the closed segments, which a kill can no longer tear
-        (:mod:`pdfem.io.segments`)."""
+    def write(self, output):
+        """Close the frame segment being written, then write the checkpoint of the run with
+        ``output`` (:class:`pdfem.output.RunOutput`) atomically (collective): it lists the
+        closed segments, which a kill can no longer tear (:mod:`pdfem.io.segments`)."""
         sim = self.sim
-        writer.close_segment()
-        state = {"nframe": writer.nframe, "frames_k": frames.k, "samples_k": samples.k,
-                 "gauges_k": gsched.k, "checkpoint_k": self.k, "run_file": writer.tmp,
-                 "segments": writer.segments, "contact_cap": sim.contact_cap,
-                 "safety": sim.safety, "dt_retries_left": sim.guards.retries_left}
+        output.writer.close_segment()
+        state = output.state()
+        state.update({"contact_cap": sim.contact_cap, "safety": sim.safety,
+                      "dt_retries_left": sim.guards.retries_left})
         arrays = {}
         if sim.comm.rank == 0:
-            arrays["energy_rows"] = np.array(rows)
-            arrays["energy_ref"] = np.array([ref[t] for t in TERMS])
-            if len(gauges):
-                t, h = gauges.history()
+            arrays["energy_rows"] = np.array(output.rows)
+            arrays["energy_ref"] = np.array([output.ref[t] for t in TERMS])
+            if len(output.gauges):
+                t, h = output.gauges.history()
                 arrays["gauge_times"], arrays["gauge_rows"] = t, h
-                arrays["gauge_sets"] = gauges.packed()
+                arrays["gauge_sets"] = output.gauges.packed()
             state["arrays"] = arrays
         write_checkpoint(self.path, sim, state)
         sim.checkpoint_requested = False
@@ -101,23 +100,26 @@ class Checkpointer:
                              f"checkpoint (bad segments entry)")
         return self.state["nframe"], segments
 
-    def restore(self, frames, samples, gsched, gauges, writer, log):
-        """Schedules, energy series and gauge histories of the checkpoint; (rows, ref)."""
+    def restore(self, output):
+        """The checkpoint's schedules, energy series and gauge histories into ``output``;
+        returns (rows, ref)."""
         sim, st, arrays = self.sim, self.state, self.sim.checkpoint.arrays
-        frames.k, samples.k, gsched.k = st["frames_k"], st["samples_k"], st["gauges_k"]
+        output.frames.k, output.samples.k, output.gsched.k = (st["frames_k"], st["samples_k"],
+                                                              st["gauges_k"])
         rows, ref = [], None
         if sim.comm.rank == 0:
             rows = [list(r) for r in arrays["energy_rows"]]
             ref = dict(zip(TERMS, arrays["energy_ref"].tolist(), strict=True))
             if "gauge_times" in arrays:
-                gauges.times = arrays["gauge_times"].tolist()
-                gauges.rows = list(arrays["gauge_rows"])
+                output.gauges.times = arrays["gauge_times"].tolist()
+                output.gauges.rows = list(arrays["gauge_rows"])
+        writer = output.writer
         if not writer.resumed:
             # No segments to continue (another run file, or the run completed): a new run
             # file starts at the restart time, its first frame with the checkpoint's forces
             if sim.comm.rank == 0:
-                log(f"pdfem: warning: {writer.tmp} is missing; frames before "
-                    f"t={sim.t:.6e} s are not in the new run file, which starts there")
+                output.log(f"pdfem: warning: {writer.tmp} is missing; frames before "
+                           f"t={sim.t:.6e} s are not in the new run file, which starts there")
             writer.restore_contact_force(sim, sim.checkpoint.contact_force)
             writer.write_frame(sim)
         return rows, ref

@@ -26,6 +26,11 @@ def global_min(comm, value):
     return comm.allreduce(float(value), op=MPI.MIN) if comm.size > 1 else float(value)
 
 
+def broadcast(comm, obj, root=0):
+    """A picklable object from ``root`` on every rank."""
+    return comm.bcast(obj, root=root) if comm.size > 1 else obj
+
+
 def global_any(comm, flag):
     """True when the flag is true on any rank."""
     return bool(comm.allreduce(int(bool(flag)), op=MPI.MAX)) if comm.size > 1 else bool(flag)

@@ -12,6 +12,7 @@ from pdfem.gauges import Gauges
 from pdfem.guards import advice
 from pdfem.io.h5out import RunWriter
 from pdfem.io.restart import Checkpointer, catch_sigterm
+from pdfem.parallel.mpi import broadcast
 
 
 class Schedule:
@@ -100,7 +101,7 @@ def _run(sim, out_path, quiet, log):
             rows.append(_row(sim.t, terms, ref, sim.energy_floor))
     guards.keep(sim, counters())
     # The t = 0 terms on every rank, for the drift check between samples
-    guards.ref = comm.bcast(ref, root=0)
+    guards.ref = broadcast(comm, ref)
     guards.sample_scale = _sample_scale(comm, rows, ref, sim.energy_floor)
     while sim.t < sim.t_end * (1 - 1e-12):
         if sim.max_steps and sim.nstep >= sim.max_steps:
@@ -177,7 +178,7 @@ def _step(sim, frames, samples, gsched, gauges, writer, nframes, rows, ref, guar
                 if guards.energy_drift > 0 and not err <= guards.energy_drift:
                     msg = (f"check energy drift: the energy-balance error {err:.3e} exceeds "
                            f"guards.energy_drift = {guards.energy_drift:g}")
-            msg, scale = comm.bcast((msg, scale), root=0)
+            msg, scale = broadcast(comm, (msg, scale))
             guards.sample_scale = max(guards.sample_scale, scale)
             if msg:
                 raise SimulationError(f"step {sim.nstep}, t={sim.t:.6e} s: {msg}")
@@ -191,7 +192,7 @@ def _sample_scale(comm, rows, ref, floor):
     if comm.rank == 0:
         scale = max([balance_scale(dict(zip(TERMS, r[1:1 + len(TERMS)], strict=True)), ref,
                                    floor) for r in rows if r[0] > 0.0] + [0.0])
-    return comm.bcast(scale, root=0)
+    return broadcast(comm, scale)
 
 
 def _drift_check(sim, guards):

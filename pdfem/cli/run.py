@@ -106,9 +106,11 @@ def write_status(path, summary, out, comm):
     """When ``path`` is set: once every rank has got here, rank 0 writes one line to it,
     ``stopped <checkpoint>`` or ``done <run file>``. A file it cannot write is only warned
     about (it is what the launcher reads, not a result)."""
+    from pdfem.parallel.mpi import barrier
+
     if not path:
         return
-    comm.Barrier()
+    barrier(comm)
     if comm.rank == 0:
         line = f"stopped {summary['checkpoint']}" if summary["stopped"] else f"done {out}"
         try:
@@ -126,6 +128,7 @@ def shock_report(out, summary, comm, quiet):
     from pdfem.analysis import analyse
     from pdfem.analysis.summary import report_text
     from pdfem.cli.analyse import prefix_of
+    from pdfem.parallel.mpi import barrier
 
     if comm.rank == 0:
         t0 = time.perf_counter()
@@ -136,4 +139,4 @@ def shock_report(out, summary, comm, quiet):
             print(report_text(result))
             print(f"analysis and figures in {time.perf_counter() - t0:.1f} s: "
                   f"{prefix_of(out)}-*.png, -summary.json, -summary.txt", flush=True)
-    comm.Barrier()
+    barrier(comm)

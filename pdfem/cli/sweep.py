@@ -129,7 +129,7 @@ def run(args):
     from pdfem.analysis.plots import sweep_plot
     from pdfem.driver import run as drive
     from pdfem.limits import check_runs
-    from pdfem.parallel.mpi import world
+    from pdfem.parallel.mpi import barrier, world
     from pdfem.solver import Simulation
 
     comm = world()
@@ -184,7 +184,7 @@ def run(args):
         if stops:
             print(f"pdfem sweep: {stops} of {len(speeds)} runs stopped on a guard (marked rows; "
                   "exit status 3)", file=sys.stderr, flush=True)
-    comm.Barrier()
+    barrier(comm)
     return 3 if stops else 0
 
 

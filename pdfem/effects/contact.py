@@ -22,7 +22,6 @@ travels with a grain when it migrates.
 import math
 
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.effects.base import Effect
 from pdfem.errors import InputError
@@ -439,11 +438,6 @@ class Contact(Effect):
         e = getattr(self, "energy", None)
         out["contact"] = e[: sim.store.nb_own] if e is not None and e.shape[0] >= \
             sim.store.nb_own else np.zeros(sim.store.nb_own)
-
-
-def count_contacts(comm, active):
-    """Number of active contacts over all ranks (diagnostic)."""
-    return comm.allreduce(int((active == C_ACTIVE).sum()), op=MPI.SUM)
 
 
 def check_contact_scene(resolved):

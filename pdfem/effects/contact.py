@@ -27,6 +27,7 @@ from pdfem.effects.base import Effect
 from pdfem.errors import InputError
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.broad_phase import candidate_pairs, element_bboxes, wall_crossings
+from pdfem.kernels.centroids import body_centroids
 from pdfem.kernels.contact import (
     C_ACTIVE,
     NNOD,
@@ -57,7 +58,6 @@ from pdfem.kernels.neighbours import (
     key_spans,
     pack_keys,
 )
-from pdfem.parallel.exchange import body_centroids
 from pdfem.parallel.mpi import allgather_rows
 
 # Beyond RCAP * delta_max the hardening law continues along its tangent (see contact_law)

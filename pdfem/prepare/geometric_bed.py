@@ -6,9 +6,9 @@ import time
 import numpy as np
 
 from pdfem.errors import InputError
+from pdfem.io.bedfile import write_bed
 from pdfem.parallel.mpi import barrier, broadcast
 from pdfem.prepare import packing
-from pdfem.prepare.bedfile import write_bed
 from pdfem.prepare.geometric import pack
 
 

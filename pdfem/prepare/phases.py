@@ -36,10 +36,10 @@ import numpy as np
 
 from pdfem.energy import global_terms
 from pdfem.errors import InputError
+from pdfem.io.bedfile import write_bed
 from pdfem.limits import check_step_count
 from pdfem.parallel.mpi import barrier, broadcast, gather_objects
 from pdfem.prepare import packing
-from pdfem.prepare.bedfile import write_bed
 from pdfem.prepare.rain import rain_grains
 from pdfem.scene import check_ranks, parse_scene
 from pdfem.scene.schema import HEAT_EFFECTS

@@ -108,7 +108,7 @@ def _scene_path(args):
 
 def _outputs(prefix, force):
     """Check the CSV, PNG and runs folder of a prefix; return the folder's path."""
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path
 
     for ext in (".csv", ".png"):
         check_output_path(prefix + ext, force, "--prefix")
@@ -237,7 +237,7 @@ def _hard(args):
             raise InputError(f"--case: {bad[0] if bad else args.case!r} is not a case of "
                              f"--size {args.size} ({', '.join(names)})")
         names = asked
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path
 
     check_output_path(args.prefix + ".json", args.force, "--prefix")
     folder = args.prefix + "-runs"
@@ -280,7 +280,7 @@ def _width_args(p):
 def _width(args):
     import json
 
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path
     from pdfem.parallel.mpi import barrier, world
     from pdfem.study import width as ws
 
@@ -338,7 +338,7 @@ def _hotspots(args):
     import json
 
     from pdfem.cli.hotspots import thresholds_of
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path
     from pdfem.parallel.mpi import barrier, world
     from pdfem.scene import check_ranks, load_scene, parse_scene
     from pdfem.study import hotspots as hs

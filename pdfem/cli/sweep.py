@@ -86,7 +86,9 @@ def _f(v, scale=1.0):
 
 
 def run(args):
-    from pdfem.cli.run import check_output_path, default_scene_path, run_outputs
+    from pdfem.cli.paths import check_output_path
+    from pdfem.cli.run import run_outputs
+    from pdfem.packaged import default_scene_path
     from pdfem.scene import check_ranks, load_scene, parse_scene
     from pdfem.study import hugoniot as hg
 

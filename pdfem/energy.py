@@ -39,12 +39,11 @@ count, so every rank count takes the same decision at the same step.
 import math
 
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.kernels.element_measures import q4_strain_energy
 from pdfem.kernels.fixed_point import column_extent, column_multiples
 from pdfem.kernels.integrate import ACC_BC, ACC_CDAMP, ACC_CWORK, ACC_DAMP, ACC_FRIC, body_sums
-from pdfem.parallel.mpi import gather_rows
+from pdfem.parallel.mpi import array_max, broadcast, gather_rows, global_sum_exact
 
 TERMS = ("kinetic", "strain", "contact", "potential", "damping", "plastic", "friction",
          "contact_damping", "contact_loss", "viscous", "bc_work", "thermal", "heat_paid",
@@ -123,7 +122,7 @@ def energy_floor(sim):
         p = sim.mat_params
         c2 = float(np.max((p[:, BULK] + 4.0 * p[:, SHEAR] / 3.0) / p[:, RHO]))
         out = FLOOR * math.fsum(rows[:, 0]) * c2
-    return sim.comm.bcast(out, root=0)
+    return broadcast(sim.comm, out)
 
 
 def global_terms(sim):
@@ -170,13 +169,11 @@ def fixed_point_sums(rows, comm, nbody):
     # Largest magnitude of each column over all ranks, and a flag for a non-finite value
     top = np.empty(nt + 1)
     column_extent(rows, top)
-    gtop = np.empty_like(top)
-    comm.Allreduce(top, gtop, op=MPI.MAX)
+    gtop = array_max(comm, top)
     if gtop[nt]:
         return None
     # Integer multiples of a power of two per column: nbody of them cannot overflow int64
     q, k = np.empty(nt), np.empty(nt, np.int64)
     column_multiples(rows, gtop, (max(int(nbody), 1) - 1).bit_length(), QBITS, q, k)
-    tot = np.empty_like(k)
-    comm.Allreduce(k, tot, op=MPI.SUM)
+    tot = global_sum_exact(comm, k)
     return [float(int(tot[i])) * float(q[i]) for i in range(nt)]

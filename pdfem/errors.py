@@ -7,6 +7,14 @@ class InputError(Exception):
     exit_status = 2
 
 
+class SceneError(Exception):
+    """A bad scene value: ``str(exc)`` is ``"key.path: what is wrong"`` on one line (the scene
+    parser prefixes the file name and raises :class:`InputError`)."""
+
+    def __init__(self, path, msg):
+        super().__init__(f"{path}: {msg}" if path else msg)
+
+
 class SimulationError(Exception):
     """A run that cannot continue (unstable contact, inverted element, non-finite value).
 

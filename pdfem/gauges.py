@@ -15,9 +15,9 @@ sample is the same on any rank count.
 """
 
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.errors import InputError
+from pdfem.parallel.mpi import allgather_objects, array_sum
 
 # Columns of one sample: velocity (2), stress (4), contact force (2)
 NCOL = 8
@@ -53,7 +53,7 @@ def _locate(sim, point, where):
             if _quad_contains(s.x[s.conn[e0 + le]], p):
                 found = min(found, (int(s.gid[b]), le))
                 break
-    best = min(comm.allgather(found))
+    best = min(allgather_objects(comm, found))
     if best[1] < 0:
         raise InputError(f"{where}.point: no element contains {list(point)} at t=0")
     return best
@@ -135,7 +135,7 @@ class Gauges:
             acc[i, 3:7] = (area[:, None] * s.sig[e].mean(axis=1)).sum(axis=0)
             if sim.fc.shape[0]:
                 acc[i, 7:] = sim.fc[np.unique(s.conn[e])].sum(axis=0)
-        comm.Allreduce(MPI.IN_PLACE, acc, op=MPI.SUM)
+        array_sum(comm, acc)
         # Area-weighted means of velocity and stress; the force is a sum
         means = acc[:, 1:7] / np.where(acc[:, :1] > 0.0, acc[:, :1], 1.0)
         return np.concatenate([means, acc[:, 7:]], axis=1)

@@ -18,12 +18,12 @@ at each energy sample). This module keeps what a failure needs:
 import math
 
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact_law import DT_FACTOR
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.parallel.exchange import rebuild
+from pdfem.parallel.mpi import global_min
 from pdfem.store import Store
 
 # What can help when a check fails, by the name its message starts with ("check NAME: ..."):
@@ -142,8 +142,7 @@ def contact_stiffness_cap(sim, contact, kcap=None):
     s, n = sim.store, sim.store.ne_own
     if kcap is not None:
         return kcap, _apply_cap(contact, kcap, None)
-    dt_el = sim.comm.allreduce(q4_stable_dt(s.x, s.conn, s.emat, sim.mat_params, 0, n),
-                               op=MPI.MIN)
+    dt_el = global_min(sim.comm, q4_stable_dt(s.x, s.conn, s.emat, sim.mat_params, 0, n))
     # Stiffness limit of each boundary edge: contact_dt(m, rigid, k L) >= dt_el
     kcap = math.inf
     for k in range(4):
@@ -153,7 +152,7 @@ def contact_stiffness_cap(sim, contact, kcap=None):
             le = np.hypot(s.x[b, 0] - s.x[a, 0], s.x[b, 1] - s.x[a, 1])
             m = np.minimum(s.m[a], s.m[b])
             kcap = min(kcap, float(((2.0 * DT_FACTOR) ** 2 * m / (dt_el * dt_el * le)).min()))
-    kcap = sim.comm.allreduce(kcap, op=MPI.MIN)
+    kcap = global_min(sim.comm, kcap)
     if not math.isfinite(kcap):
         return None, None
     return kcap, _apply_cap(contact, kcap, dt_el)

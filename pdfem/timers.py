@@ -5,6 +5,8 @@ from contextlib import contextmanager
 
 import numpy as np
 
+from pdfem.parallel.mpi import allgather_objects
+
 PHASES = ("elements", "contact_detection", "contact_forces", "halo", "migration", "heat",
           "integration", "diagnostics", "output")
 
@@ -29,12 +31,12 @@ class Timers:
     def report(self, comm):
         """{phase: (min, avg, max) seconds across ranks}, same on every rank."""
         local = np.array([self.seconds[p] for p in PHASES])
-        allv = np.array(comm.allgather(local))
+        allv = np.array(allgather_objects(comm, local))
         return {p: (allv[:, i].min(), allv[:, i].mean(), allv[:, i].max())
                 for i, p in enumerate(PHASES)}
 
     def imbalance(self, comm):
         """Max over mean of the ranks' busy time (every phase but output): 1 is perfect."""
         busy = sum(v for k, v in self.seconds.items() if k != "output")
-        allv = np.array(comm.allgather(busy))
+        allv = np.array(allgather_objects(comm, busy))
         return float(allv.max() / allv.mean()) if allv.mean() > 0 else 1.0

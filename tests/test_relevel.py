@@ -7,8 +7,8 @@ import pytest
 
 from pdfem.analysis.runfile import element_areas
 from pdfem.errors import InputError
+from pdfem.io.bedfile import read_bed, write_bed
 from pdfem.mesh.ellipse import _kite_numbering, ellipse_mesh, place
-from pdfem.prepare.bedfile import read_bed, write_bed
 from pdfem.prepare.relevel import refine_nodes, refine_points, relevel_bed
 from pdfem.scene.values import SceneError
 

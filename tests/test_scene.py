@@ -491,7 +491,7 @@ def test_validation_timing_1e5_grains(tmp_path, capsys):
 def test_packaged_default_scene_and_bed_load():
     import h5py
 
-    from pdfem.cli.run import default_scene_path
+    from pdfem.packaged import default_scene_path
 
     sc = load_scene(default_scene_path())
     r = sc.resolved

@@ -17,11 +17,11 @@ import tempfile
 import time
 
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.bench.contact import reset_peak, rss_bytes
 from pdfem.bench.elements import machine
 from pdfem.bench.parallel import bed_simulation
+from pdfem.parallel.mpi import barrier, broadcast, global_max, global_sum, world
 
 # Warm-up steps before the first checkpoint (contact history builds up)
 WARMUP = 3
@@ -30,14 +30,14 @@ WARMUP = 3
 def _measured(comm, action):
     """Run action() on every rank; (slowest rank's seconds, this rank's peak growth in
     bytes over its resident size before)."""
-    comm.Barrier()
+    barrier(comm)
     reset_peak()
     before = rss_bytes("VmRSS")
     t0 = time.perf_counter()
     action()
     wall = time.perf_counter() - t0
     peak = rss_bytes("VmHWM")
-    return comm.allreduce(wall, op=MPI.MAX), peak - before
+    return global_max(comm, wall), peak - before
 
 
 def _state():
@@ -53,18 +53,18 @@ def run_checkpoint(grains, repeat, comm=None):
     from pdfem.io.checkpoint import write_checkpoint
     from pdfem.solver import Simulation
 
-    comm = comm or MPI.COMM_WORLD
+    comm = comm or world()
     sim = bed_simulation(comm, grains)
     for _ in range(WARMUP):
         sim.step()
-    folder = comm.bcast(tempfile.mkdtemp(prefix="pdfem-bench-") if comm.rank == 0 else None)
+    folder = broadcast(comm, tempfile.mkdtemp(prefix="pdfem-bench-") if comm.rank == 0 else None)
     path = os.path.join(folder, "bench.ckpt.h5")
     resident = rss_bytes("VmRSS")
     writes = [_measured(comm, lambda: write_checkpoint(path, sim, _state()))
               for _ in range(repeat)]
     size = os.path.getsize(path)
     scene, fields = sim.scene, sim.fields
-    nhist = comm.allreduce(int(sim.store.hkey.shape[0]), op=MPI.SUM)
+    nhist = global_sum(comm, sim.store.hkey.shape[0])
     sim = None  # freed before the restarts
 
     # The restart's whole set-up: the scene's bodies, then the checkpoint's in their place
@@ -85,7 +85,7 @@ def run_checkpoint(grains, repeat, comm=None):
 
 def print_checkpoint(grains, repeat, log=print):
     """Run the checkpoint benchmark; print its figures on rank 0; return the dict."""
-    comm = MPI.COMM_WORLD
+    comm = world()
     r = run_checkpoint(grains, repeat, comm)
     if comm.rank != 0:
         return r

@@ -1,16 +1,16 @@
 """``pdfem bench contact``: contact detection and force time per step on dense beds.
 
 For each bed size (pdfem.bench.beds: level-1 grains, 6 elements each, grown 12 % at start so
-that about 3 grain-grain contacts per grain are active) the Simulation is built on
-MPI.COMM_SELF, takes two untimed warm-up steps, then ``repeat`` samples of k steps each;
-per-step figures are medians over the samples. An untimed 100-grain bed runs first, so numba
-compile or cache load is excluded everywhere. Contact time is the sum of the timer phases
-contact_detection and contact_forces; the step time is the wall time of ``Simulation.step``.
-The grain-pair candidate search runs at rebuilds, under the migration phase, and is not part
-of the contact figures (the rebuild count is printed). Memory per grain is the growth of the
-resident set size from before the scene is read to after the timed steps (freed heap pages
-returned to the OS first, pdfem.memory.trim), over the grains: what the running simulation
-holds, all in. The peak is that of VmHWM (set-up included).
+that about 3 grain-grain contacts per grain are active) the Simulation is built on a one-rank
+communicator (pdfem.parallel.mpi.self_comm), takes two untimed warm-up steps, then ``repeat``
+samples of k steps each; per-step figures are medians over the samples. An untimed 100-grain bed
+runs first, so numba compile or cache load is excluded everywhere. Contact time is the sum of
+the timer phases contact_detection and contact_forces; the step time is the wall time of
+``Simulation.step``. The grain-pair candidate search runs at rebuilds, under the migration
+phase, and is not part of the contact figures (the rebuild count is printed). Memory per grain
+is the growth of the resident set size from before the scene is read to after the timed steps
+(freed heap pages returned to the OS first, pdfem.memory.trim), over the grains: what the
+running simulation holds, all in. The peak is that of VmHWM (set-up included).
 """
 
 import gc
@@ -111,8 +111,7 @@ def run_contact(n, repeat, material="elastic", yardstick=False):
     """Build an n-grain bed of ``material`` grains (pdfem.bench.beds.MATERIALS), time
     ``repeat`` samples; return a dict of figures (with yardstick, also the contact pass of
     the last step against its C twin, pdfem.bench.pass_yardstick)."""
-    from mpi4py import MPI
-
+    from pdfem.parallel.mpi import self_comm
     from pdfem.scene import parse_scene
     from pdfem.solver import Simulation
 
@@ -124,7 +123,7 @@ def run_contact(n, repeat, material="elastic", yardstick=False):
         t0 = time.perf_counter()
         scene = parse_scene(bed_scene(n, folder, inflate=INFLATE, material=material), folder,
                             name="bench-bed")
-        sim = Simulation(scene, MPI.COMM_SELF, init_state=inflate_grains(INFLATE))
+        sim = Simulation(scene, self_comm(), init_state=inflate_grains(INFLATE))
         setup = time.perf_counter() - t0
     eff = _contact_effect(sim)
     for _ in range(WARMUP):

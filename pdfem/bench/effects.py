@@ -12,9 +12,8 @@ import statistics
 import tempfile
 import time
 
-from mpi4py import MPI
-
 from pdfem.bench.elements import mesh_shape
+from pdfem.parallel.mpi import self_comm
 
 # Steps per timed sample
 STEPS = 5
@@ -96,7 +95,7 @@ def measure(n, rule, material, heat, repeat):
 
     with tempfile.TemporaryDirectory() as tmp:
         sim = Simulation(parse_scene(block_scene(n, rule, material, heat, "b.h5"), tmp),
-                         MPI.COMM_SELF)
+                         self_comm())
         for _ in range(2):
             sim.step()
         ne = sim.store.ne_own

@@ -18,11 +18,11 @@ import tempfile
 import time
 
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.bench.beds import bed_scene, inflate_grains
 from pdfem.bench.contact import INFLATE
 from pdfem.bench.elements import machine
+from pdfem.parallel.mpi import array_max, barrier, broadcast, global_max, world
 
 # Warm-up steps and timed steps per sample
 WARMUP = 3
@@ -35,16 +35,16 @@ def bed_simulation(comm, n, skin=None):
     from pdfem.solver import Simulation
 
     folder = tempfile.mkdtemp(prefix="pdfem-bench-") if comm.rank == 0 else None
-    folder = comm.bcast(folder)
+    folder = broadcast(comm, folder)
     text = None
     if comm.rank == 0:
         text = bed_scene(n, folder, inflate=INFLATE, material="cap")
-    text = comm.bcast(text)
+    text = broadcast(comm, text)
     text = text.replace("[domain]", '[domain]\npartition = "strips"', 1)
     if skin is not None:
         text = "\n".join(f"skin = {skin!r}" if ln.startswith("skin =") else ln
                          for ln in text.splitlines())
-    comm.Barrier()
+    barrier(comm)
     scene = parse_scene(text, folder, name="bench-parallel")
     return Simulation(scene, comm, init_state=inflate_grains(INFLATE))
 
@@ -53,13 +53,13 @@ def _sample(sim, comm, k):
     """k steps: per-step (wall, halo, migration) seconds of the slowest rank, rebuild count."""
     tm = sim.timers.seconds
     h0, m0, r0 = tm["halo"], tm["migration"], sim.timers.calls["migration"]
-    comm.Barrier()
+    barrier(comm)
     t0 = time.perf_counter()
     for _ in range(k):
         sim.step()
     wall = time.perf_counter() - t0
     loc = np.array([wall, tm["halo"] - h0, tm["migration"] - m0])
-    comm.Allreduce(MPI.IN_PLACE, loc, op=MPI.MAX)
+    loc = array_max(comm, loc)
     return loc / k, sim.timers.calls["migration"] - r0
 
 
@@ -73,12 +73,12 @@ def _boundary_cells(sim):
         for dx in (-1, 0, 1):
             jx, jy = np.clip(ix + dx, 0, g.nx - 1), np.clip(iy + dy, 0, g.ny - 1)
             edge |= own[jx + g.nx * jy] != sim.comm.rank
-    return sim.comm.allreduce(int((mine & edge).sum()), op=MPI.MAX)
+    return int(global_max(sim.comm, int((mine & edge).sum())))
 
 
 def run_parallel(per_rank, repeat, comm=None):
     """Time the bed on comm's ranks; a dict of figures (same on every rank)."""
-    comm = comm or MPI.COMM_WORLD
+    comm = comm or world()
     n = per_rank * comm.size
     out = {"ranks": comm.size, "grains": n}
     for label, skin in (("normal", None), ("forced", 1e-12)):
@@ -103,7 +103,7 @@ def run_parallel(per_rank, repeat, comm=None):
 
 def print_parallel(per_rank, repeat, log=print):
     """Run the parallel benchmark; print its figures on rank 0; return the dict."""
-    comm = MPI.COMM_WORLD
+    comm = world()
     r = run_parallel(per_rank, repeat, comm)
     if comm.rank != 0:
         return r

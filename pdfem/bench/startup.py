@@ -21,7 +21,7 @@ from pdfem.bench.elements import machine
 
 def _scene(folder):
     """The default scene with one step and its output in folder; returns the scene path."""
-    from pdfem.cli.run import default_scene_path
+    from pdfem.packaged import default_scene_path
 
     src = default_scene_path()
     with open(src) as f:

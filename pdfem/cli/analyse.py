@@ -14,12 +14,6 @@ def add_parser(sub):
                    "figure files")
 
 
-def prefix_of(path):
-    """``shot912.h5`` -> ``shot912``."""
-    root, ext = os.path.splitext(path)
-    return root if ext in (".h5", ".hdf5") else path
-
-
 def _plots(path):
     """([shock].plots of a run file's scene, whether its frames hold temperatures), or
     (None, False) when the file does not tell (then :func:`pdfem.analysis.analyse` reports
@@ -41,7 +35,7 @@ def _plots(path):
 def run(args):
     from pdfem.analysis import analyse
     from pdfem.analysis.summary import output_files, report_text
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path, prefix_of
     from pdfem.errors import InputError
     from pdfem.io.probe import check_metadata
 

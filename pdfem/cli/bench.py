@@ -97,7 +97,7 @@ def run(args):
     per_rank = _positive_int("--per-rank", args.per_rank, least=2) \
         if hasattr(args, "per_rank") else None
     if args.what == "parallel" and args.json is not None:
-        from pdfem.cli.run import check_output_path
+        from pdfem.cli.paths import check_output_path
 
         check_output_path(args.json, args.force, "--json")
     from pdfem.parallel.mpi import world

@@ -102,7 +102,7 @@ def _format(fmt):
 
 def _outputs(runfile, prefix, fmt, ks, force):
     """The files of the export (checked: new or --force, never the run file itself)."""
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path
 
     if fmt == "xdmf":
         # meshio's XDMF time series: <prefix>.xdmf and its data in <prefix>.h5

@@ -121,8 +121,7 @@ def _report(result, paths):
 def run(args):
     from pdfem.analysis.hotcensus import census
     from pdfem.analysis.hotwrite import output_files, write_outputs
-    from pdfem.cli.analyse import prefix_of
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path, prefix_of
 
     if not args.runfile:
         raise InputError("runfile: empty file name")

@@ -70,7 +70,7 @@ def _strain(value, option):
 
 def run(args):
     """Run the material point and write the CSV; returns 0."""
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path
     from pdfem.material_point import (
         cap_params_from_table,
         named_path,

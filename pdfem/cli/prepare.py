@@ -2,7 +2,7 @@
 
 import os
 
-from pdfem.cli.run import check_output_path
+from pdfem.cli.paths import check_output_path
 from pdfem.limits import add_allow_huge
 
 

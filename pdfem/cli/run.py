@@ -2,24 +2,17 @@
 
 import os
 import sys
-from importlib import resources
 
+from pdfem.cli.paths import check_output_path, prefix_of
 from pdfem.errors import InputError
 from pdfem.limits import MAX_STEPS, add_allow_huge, check_step_count
+from pdfem.packaged import DEFAULT_SCENE, default_scene_path
 
-DEFAULT_SCENE = "shot912.toml"
-# Suffix of an output file while it is written (renamed when complete)
-PART = ".part"
 # Environment variable naming a file that rank 0 writes once every rank has ended the run
 # cleanly (finished, or stopped with a checkpoint by SIGTERM or SIGUSR1): jobs/mpirun.sh reads
 # it to tell a clean stop from a failure when mpirun's own exit status cannot (it exits 1
 # after it was itself signalled, although every rank exited 0)
 STATUS_ENV = "PDFEM_STATUS_FILE"
-
-
-def default_scene_path():
-    """Path of the scene that runs when ``python -m pdfem`` gets no argument."""
-    return str(resources.files("pdfem") / "scenes" / DEFAULT_SCENE)
 
 
 def add_parser(sub):
@@ -34,34 +27,11 @@ def add_parser(sub):
     add_allow_huge(p, f"more than {MAX_STEPS:.0e} steps")
 
 
-def check_output_path(path, force, key="output.path"):
-    """The output file must be new (or --force), not a folder, and its folder writable."""
-    if not path:
-        raise InputError(f"{key}: empty file name")
-    if "\0" in path:
-        raise InputError(f"{key}: {path!r}: a file name cannot hold a NUL byte")
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        what = "is not a folder" if os.path.exists(folder) else "does not exist"
-        raise InputError(f"{key}: {folder} {what}")
-    if not os.access(folder, os.W_OK):
-        raise InputError(f"{key}: folder {folder} is not writable")
-    if os.path.isdir(path):
-        raise InputError(f"{key}: {path} is a folder, not a file name")
-    # Room for the ".part" suffix of the file being written
-    longest = os.pathconf(folder, "PC_NAME_MAX") - len(PART)
-    if len(os.fsencode(os.path.basename(path))) > longest:
-        raise InputError(f"{key}: {path}: file name longer than {longest} bytes")
-    if os.path.lexists(path) and not force:
-        raise InputError(f"{key}: {path} exists (use --force to overwrite)")
-
-
 def run_outputs(out, scene, plots=None, restart=None):
     """Every file a run of ``scene`` into ``out`` may leave: the run file, its XDMF sidecar,
     its checkpoint (unless it is the ``restart`` being continued) and, for a shock scene, the
     analysis (summary, and figures unless ``plots`` or the scene's shock.plots is "none")."""
     from pdfem.analysis.summary import output_files, thermal_fields
-    from pdfem.cli.analyse import prefix_of
 
     files = [out, os.path.splitext(out)[0] + ".xdmf"]
     if os.path.abspath(files[0]) == os.path.abspath(files[1]):
@@ -106,9 +76,11 @@ def write_status(path, summary, out, comm):
     """When ``path`` is set: once every rank has got here, rank 0 writes one line to it,
     ``stopped <checkpoint>`` or ``done <run file>``. A file it cannot write is only warned
     about (it is what the launcher reads, not a result)."""
+    from pdfem.parallel.mpi import barrier
+
     if not path:
         return
-    comm.Barrier()
+    barrier(comm)
     if comm.rank == 0:
         line = f"stopped {summary['checkpoint']}" if summary["stopped"] else f"done {out}"
         try:
@@ -125,7 +97,7 @@ def shock_report(out, summary, comm, quiet):
 
     from pdfem.analysis import analyse
     from pdfem.analysis.summary import report_text
-    from pdfem.cli.analyse import prefix_of
+    from pdfem.parallel.mpi import barrier
 
     if comm.rank == 0:
         t0 = time.perf_counter()
@@ -136,4 +108,4 @@ def shock_report(out, summary, comm, quiet):
             print(report_text(result))
             print(f"analysis and figures in {time.perf_counter() - t0:.1f} s: "
                   f"{prefix_of(out)}-*.png, -summary.json, -summary.txt", flush=True)
-    comm.Barrier()
+    barrier(comm)

@@ -108,7 +108,7 @@ def _scene_path(args):
 
 def _outputs(prefix, force):
     """Check the CSV, PNG and runs folder of a prefix; return the folder's path."""
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path
 
     for ext in (".csv", ".png"):
         check_output_path(prefix + ext, force, "--prefix")
@@ -121,7 +121,7 @@ def _outputs(prefix, force):
 
 
 def _accuracy(args):
-    from pdfem.parallel.mpi import world
+    from pdfem.parallel.mpi import barrier, world
     from pdfem.scene import check_ranks, load_scene
     from pdfem.study import accuracy as acc
     from pdfem.study import pareto
@@ -162,7 +162,7 @@ def _accuracy(args):
         if os.path.isdir(folder) and args.force:
             shutil.rmtree(folder)
         os.makedirs(folder, exist_ok=True)
-    comm.Barrier()
+    barrier(comm)
     rows = study.run_all(levels, rules, safeties, scales, args.tol, base_given)
     # The files, the table and the recommendation
     if comm.rank == 0:
@@ -178,7 +178,7 @@ def _accuracy(args):
                                          scene.resolved.get("contact", {}).get("kn0")))
         print(f"pdfem study accuracy: {args.prefix}.csv, {args.prefix}.png, runs in "
               f"{folder}/; {sum(r['wall_s'] for r in rows):.0f} s of runs", flush=True)
-    comm.Barrier()
+    barrier(comm)
     if not args.no_convergence:
         _print_convergence(comm, CONVERGENCE_SIZES, rules)
     return 0
@@ -186,11 +186,12 @@ def _accuracy(args):
 
 def _print_convergence(comm, sizes, rules):
     """The element's convergence order, computed serially on rank 0."""
+    from pdfem.parallel.mpi import barrier
     from pdfem.study.convergence import observed_orders, report_lines
 
     if comm.rank == 0:
         print("\n".join(report_lines(observed_orders(sizes, rules))), flush=True)
-    comm.Barrier()
+    barrier(comm)
 
 
 def _convergence(args):
@@ -220,7 +221,7 @@ def _hard_args(p):
 def _hard(args):
     import json
 
-    from pdfem.parallel.mpi import world
+    from pdfem.parallel.mpi import barrier, world
     from pdfem.study.hard import print_rows, run_case
     from pdfem.study.hard_cases import CASES, LARGE_ONLY
 
@@ -236,7 +237,7 @@ def _hard(args):
             raise InputError(f"--case: {bad[0] if bad else args.case!r} is not a case of "
                              f"--size {args.size} ({', '.join(names)})")
         names = asked
-    from pdfem.cli.run import check_output_path
+    from pdfem.cli.paths import check_output_path
 
     check_output_path(args.prefix + ".json", args.force, "--prefix")
     folder = args.prefix + "-runs"
@@ -258,7 +259,7 @@ def _hard(args):
         passed = sum(r["passed"] for r in rows)
         print(f"pdfem study hard: {passed} of {len(rows)} cases pass on 1 and {comm.size} "
               f"ranks; {args.prefix}.json, runs in {folder}/", flush=True)
-    comm.Barrier()
+    barrier(comm)
     return 0
 
 
@@ -279,8 +280,8 @@ def _width_args(p):
 def _width(args):
     import json
 
-    from pdfem.cli.run import check_output_path
-    from pdfem.parallel.mpi import world
+    from pdfem.cli.paths import check_output_path
+    from pdfem.parallel.mpi import barrier, world
     from pdfem.study import width as ws
 
     widths = _check(_numbers(args.widths, "--widths"), lambda v: 1.0 <= v <= 4096.0,
@@ -300,7 +301,7 @@ def _width(args):
         if os.path.isdir(folder) and args.force:
             shutil.rmtree(folder)
         os.makedirs(folder, exist_ok=True)
-    comm.Barrier()
+    barrier(comm)
     rows = ws.run_study(widths, args.seeds, args.seed_width, folder, comm,
                         lambda s: print(s, flush=True), args.allow_huge)
     if comm.rank == 0:
@@ -312,7 +313,7 @@ def _width(args):
             json.dump(_plain({"rows": rows, "conclusions": found}), f, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         print(f"pdfem study width: {args.prefix}.json, beds and runs in {folder}/", flush=True)
-    comm.Barrier()
+    barrier(comm)
     return 0
 
 
@@ -337,8 +338,8 @@ def _hotspots(args):
     import json
 
     from pdfem.cli.hotspots import thresholds_of
-    from pdfem.cli.run import check_output_path
-    from pdfem.parallel.mpi import world
+    from pdfem.cli.paths import check_output_path
+    from pdfem.parallel.mpi import barrier, world
     from pdfem.scene import check_ranks, load_scene, parse_scene
     from pdfem.study import hotspots as hs
 
@@ -372,7 +373,7 @@ def _hotspots(args):
         os.makedirs(folder, exist_ok=True)
         print(f"pdfem study hotspots: {path} (thermal variant) at levels "
               f"{','.join(map(str, levels))}, rule {rule}, on {comm.size} rank(s)", flush=True)
-    comm.Barrier()
+    barrier(comm)
     rows, chg = study.run_all(levels, thresholds, spot)
     if comm.rank == 0:
         from pdfem.analysis.summary import _plain
@@ -386,7 +387,7 @@ def _hotspots(args):
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         print(f"pdfem study hotspots: {args.prefix}.csv, {args.prefix}.json, runs in "
               f"{folder}/", flush=True)
-    comm.Barrier()
+    barrier(comm)
     return 0
 
 

@@ -86,7 +86,9 @@ def _f(v, scale=1.0):
 
 
 def run(args):
-    from pdfem.cli.run import check_output_path, default_scene_path, run_outputs
+    from pdfem.cli.paths import check_output_path
+    from pdfem.cli.run import run_outputs
+    from pdfem.packaged import default_scene_path
     from pdfem.scene import check_ranks, load_scene, parse_scene
     from pdfem.study import hugoniot as hg
 
@@ -129,7 +131,7 @@ def run(args):
     from pdfem.analysis.plots import sweep_plot
     from pdfem.driver import run as drive
     from pdfem.limits import check_runs
-    from pdfem.parallel.mpi import world
+    from pdfem.parallel.mpi import barrier, world
     from pdfem.solver import Simulation
 
     comm = world()
@@ -184,7 +186,7 @@ def run(args):
         if stops:
             print(f"pdfem sweep: {stops} of {len(speeds)} runs stopped on a guard (marked rows; "
                   "exit status 3)", file=sys.stderr, flush=True)
-    comm.Barrier()
+    barrier(comm)
     return 3 if stops else 0
 
 

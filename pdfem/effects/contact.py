@@ -22,12 +22,12 @@ travels with a grain when it migrates.
 import math
 
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.effects.base import Effect
 from pdfem.errors import InputError
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.broad_phase import candidate_pairs, element_bboxes, wall_crossings
+from pdfem.kernels.centroids import body_centroids
 from pdfem.kernels.contact import (
     C_ACTIVE,
     NNOD,
@@ -58,7 +58,6 @@ from pdfem.kernels.neighbours import (
     key_spans,
     pack_keys,
 )
-from pdfem.parallel.exchange import body_centroids
 from pdfem.parallel.mpi import allgather_rows
 
 # Beyond RCAP * delta_max the hardening law continues along its tangent (see contact_law)
@@ -441,11 +440,6 @@ class Contact(Effect):
         e = getattr(self, "energy", None)
         out["contact"] = e[: sim.store.nb_own] if e is not None and e.shape[0] >= \
             sim.store.nb_own else np.zeros(sim.store.nb_own)
-
-
-def count_contacts(comm, active):
-    """Number of active contacts over all ranks (diagnostic)."""
-    return comm.allreduce(int((active == C_ACTIVE).sum()), op=MPI.SUM)
 
 
 def check_contact_scene(resolved):

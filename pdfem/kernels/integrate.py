@@ -144,13 +144,3 @@ def moves_half_skin(x, xref, v, f, m, bcf, bcv, n0, n1, dt_next, dt_avg, half_sk
         if d * (1.0 + 1e-9) > half_skin:
             return True
     return False
-
-
-@njit(cache=True)
-def all_finite(a):
-    """True when no entry of the flat view of a is NaN or infinite."""
-    flat = a.ravel()
-    for i in range(flat.shape[0]):
-        if not np.isfinite(flat[i]):
-            return False
-    return True

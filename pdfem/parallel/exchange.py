@@ -1,4 +1,4 @@
-"""Migration, ghost lists and the per-step halo refresh.
+"""Migration and ghost lists (the per-step halo refresh is :mod:`pdfem.parallel.halo`).
 
 A rebuild runs in two phases. Phase A sends every owned grain whose centroid lies in a cell
 of another rank to that rank, with all of its state and its contact history. Phase B sends
@@ -8,24 +8,11 @@ effects register) of ghosts are refreshed, from owner to ghost, every step.
 """
 
 import numpy as np
-from mpi4py import MPI
-from numba import njit
 
+from pdfem.kernels.centroids import body_centroids
+from pdfem.parallel.halo import Halo
 from pdfem.parallel.mpi import alltoallv
 from pdfem.store import Batch, Store, ranges
-
-
-@njit(cache=True)
-def body_centroids(x, nstart, nn, b0, b1, out):
-    """Mean node position of bodies [b0, b1), summed in node order."""
-    for b in range(b0, b1):
-        sx = 0.0
-        sy = 0.0
-        for i in range(nstart[b], nstart[b] + nn[b]):
-            sx += x[i, 0]
-            sy += x[i, 1]
-        out[b - b0, 0] = sx / nn[b]
-        out[b - b0, 1] = sy / nn[b]
 
 
 def owned_grain_cells(store, grid, nglobal):
@@ -63,37 +50,6 @@ def _history_rows(batches, fields, keep_gids, global_gids):
     both_global = np.isin(a, global_gids) & np.isin(b, global_gids)
     sel = mine | both_global
     return keys[sel], vals[sel]
-
-
-class Halo:
-    """Per-step owner -> ghost refresh plan: node indices to send, ghost slices to fill."""
-
-    def __init__(self, comm, send, recv):
-        self.comm = comm
-        self.send = send  # {rank: local node indices, in the order the receiver stores them}
-        self.recv = recv  # {rank: (first ghost node, count)}
-
-    def refresh(self, arrays):
-        """Copy owner values of the given node arrays into the ghosts (x, v, ...)."""
-        comm = self.comm
-        reqs, rbufs = [], {}
-        width = sum(int(np.prod(a.shape[1:])) for a in arrays)
-        for r, (_, cnt) in self.recv.items():
-            rbufs[r] = np.empty(cnt * width, np.float64)
-            reqs.append(comm.Irecv(rbufs[r], source=r, tag=7))
-        sbufs = []
-        for r, idx in self.send.items():
-            buf = np.concatenate([a[idx].reshape(idx.shape[0], -1) for a in arrays], axis=1)
-            sbufs.append(np.ascontiguousarray(buf).ravel())
-            reqs.append(comm.Isend(sbufs[-1], dest=r, tag=7))
-        MPI.Request.Waitall(reqs)
-        for r, (n0, cnt) in self.recv.items():
-            buf = rbufs[r].reshape(cnt, -1)
-            col = 0
-            for a in arrays:
-                w = int(np.prod(a.shape[1:]))
-                a[n0 : n0 + cnt] = buf[:, col : col + w].reshape((cnt,) + a.shape[1:])
-                col += w
 
 
 def rebuild(comm, store, grid, owner, nglobal):

@@ -1,6 +1,13 @@
-"""MPI helpers: the world communicator, abort on uncaught exceptions, buffer exchanges."""
+"""MPI helpers: the communicators, abort on uncaught exceptions, reductions, broadcasts,
+gathers and buffer exchanges.
+
+Every collective of the solver outside this package (and io's parallel writer) goes through
+these wrappers, so that mpi4py is imported here alone. Each is the single MPI call it names;
+a one-rank fast path is taken only where it returns the identical value.
+"""
 
 import sys
+from contextlib import contextmanager
 
 import numpy as np
 from mpi4py import MPI
@@ -21,19 +28,87 @@ def world():
     return comm
 
 
+def self_comm():
+    """A communicator of this process alone (a serial run inside an MPI job)."""
+    return MPI.COMM_SELF
+
+
+@contextmanager
+def alone(comm, root=0):
+    """A one-rank communicator holding rank ``root`` of comm (None on the other ranks), freed
+    on leaving the block; collective over comm."""
+    solo = comm.Split(0 if comm.rank == root else MPI.UNDEFINED, 0)
+    try:
+        yield solo if comm.rank == root else None
+    finally:
+        if comm.rank == root:
+            solo.Free()
+
+
+def barrier(comm):
+    """Wait until every rank of comm reaches this point."""
+    comm.Barrier()
+
+
+def broadcast(comm, obj, root=0):
+    """Rank root's (picklable) object, on every rank."""
+    return comm.bcast(obj, root=root)
+
+
+def gather_objects(comm, obj, root=0):
+    """Every rank's (picklable) object, in rank order, on root (None elsewhere)."""
+    return comm.gather(obj, root=root)
+
+
+def allgather_objects(comm, obj):
+    """Every rank's (picklable) object, in rank order, on every rank."""
+    return comm.allgather(obj)
+
+
 def global_min(comm, value):
     """The least of a float over every rank."""
     return comm.allreduce(float(value), op=MPI.MIN) if comm.size > 1 else float(value)
 
 
-def broadcast(comm, obj, root=0):
-    """A picklable object from ``root`` on every rank."""
-    return comm.bcast(obj, root=root) if comm.size > 1 else obj
-
-
 def global_any(comm, flag):
     """True when the flag is true on any rank."""
     return bool(comm.allreduce(int(bool(flag)), op=MPI.MAX)) if comm.size > 1 else bool(flag)
+
+
+def global_max(comm, value):
+    """The largest of a float over every rank."""
+    return comm.allreduce(float(value), op=MPI.MAX) if comm.size > 1 else float(value)
+
+
+def global_sum(comm, value):
+    """The sum of an int over every rank (exact)."""
+    return comm.allreduce(int(value), op=MPI.SUM) if comm.size > 1 else int(value)
+
+
+def array_max(comm, a):
+    """The elementwise largest of a float64 array (the same shape on every rank) over every
+    rank; a new array."""
+    a = np.ascontiguousarray(a, np.float64)
+    out = np.empty_like(a)
+    comm.Allreduce(a, out, op=MPI.MAX)
+    return out
+
+
+def array_sum(comm, a):
+    """The elementwise sum of a float64 array (the same shape on every rank) over every rank,
+    in place; returns a. Rounded: the same on any rank count only where one rank holds a
+    non-zero value per entry."""
+    comm.Allreduce(MPI.IN_PLACE, a, op=MPI.SUM)
+    return a
+
+
+def global_sum_exact(comm, k):
+    """The elementwise sum of an int64 array over every rank: exact, so the same in any order
+    and on any rank count (the caller keeps the total within int64); a new array."""
+    k = np.ascontiguousarray(k, np.int64)
+    out = np.empty_like(k)
+    comm.Allreduce(k, out, op=MPI.SUM)
+    return out
 
 
 def alltoallv(comm, bufs):

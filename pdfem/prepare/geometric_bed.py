@@ -6,8 +6,9 @@ import time
 import numpy as np
 
 from pdfem.errors import InputError
+from pdfem.io.bedfile import write_bed
+from pdfem.parallel.mpi import barrier, broadcast
 from pdfem.prepare import packing
-from pdfem.prepare.bedfile import write_bed
 from pdfem.prepare.geometric import pack
 
 
@@ -62,8 +63,8 @@ def prepare_geometric(path, scene, out, comm, log):
             result = _make(path, scene, out, log)
         except InputError as exc:
             err = str(exc)
-    err = comm.bcast(err, root=0)
+    err = broadcast(comm, err)
     if err:
         raise InputError(err)
-    comm.Barrier()
+    barrier(comm)
     return result

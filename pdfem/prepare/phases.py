@@ -36,9 +36,10 @@ import numpy as np
 
 from pdfem.energy import global_terms
 from pdfem.errors import InputError
+from pdfem.io.bedfile import write_bed
 from pdfem.limits import check_step_count
+from pdfem.parallel.mpi import barrier, broadcast, gather_objects
 from pdfem.prepare import packing
-from pdfem.prepare.bedfile import write_bed
 from pdfem.prepare.rain import rain_grains
 from pdfem.scene import check_ranks, parse_scene
 from pdfem.scene.schema import HEAT_EFFECTS
@@ -130,7 +131,7 @@ def _gather_grains(sim):
     elems = [slice(s.estart[b], s.estart[b] + s.ne[b]) for b in own]
     mine = (s.gid[own], [s.x[k] for k in nodes], [s.v[k] for k in nodes],
             [s.sig[k] for k in elems], [s.mst[k] for k in elems])
-    parts = sim.comm.gather(mine, root=0)
+    parts = gather_objects(sim.comm, mine)
     if sim.comm.rank != 0:
         return None
     gids = np.concatenate([p[0] for p in parts])
@@ -152,7 +153,7 @@ def _run_phase(name, scene, comm, threshold, log, max_steps, where, allow_huge=F
         sim.step()
         if sim.nstep >= MIN_STEPS and sim.nstep % CHECK == 0:
             terms = global_terms(sim)
-            ke = comm.bcast(terms["kinetic"] if comm.rank == 0 else None, root=0)
+            ke = broadcast(comm, terms["kinetic"] if comm.rank == 0 else None)
             if ke < threshold:
                 break
     done = ke < threshold
@@ -192,7 +193,7 @@ def prepare_rain(path, scene, out, comm, log, allow_huge=False):
         state, grains, bed, weight_box = None, rows, None, wbox
         for k, phase in enumerate(phases):
             if phase == "weight":
-                top = comm.bcast(float(state[1][:, :, 1].max()) if comm.rank == 0 else None)
+                top = broadcast(comm, float(state[1][:, :, 1].max()) if comm.rank == 0 else None)
                 y0 = top + pr["drop_gap"]
                 weight_box = [wbox[0], y0, wbox[2], y0 + wbox[3] - wbox[1]]
                 if weight_box[3] > box[3]:
@@ -214,7 +215,7 @@ def prepare_rain(path, scene, out, comm, log, allow_huge=False):
                 if phase == "settle":
                     fig, err = _bed_figures(state, level, box, floor, rho, figs, pr, log)
                     attrs.update(fig, scene=scene.to_toml_string())
-            err = comm.bcast(err, root=0)
+            err = broadcast(comm, err)
             if err:
                 raise InputError(err)
             if comm.rank == 0:
@@ -223,7 +224,7 @@ def prepare_rain(path, scene, out, comm, log, allow_huge=False):
                 last = phase == "settle"
                 write_bed(bed, ell, state[1], np.zeros_like(state[2]), attrs,
                           state[3] if last else None, state[4] if last else None)
-            comm.Barrier()
+            barrier(comm)
     finally:
         if comm.rank == 0:
             for p in tmp:

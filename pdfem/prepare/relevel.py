@@ -1,6 +1,6 @@
 """A prepared bed at another mesh level (and element rule): the same grains, finer quads.
 
-A bed file holds every grain's mesh at one level ``L0`` (:mod:`pdfem.prepare.bedfile`).
+A bed file holds every grain's mesh at one level ``L0`` (:mod:`pdfem.io.bedfile`).
 :func:`relevel_bed` writes the same bed at level ``L`` (a multiple of ``L0``) without
 re-preparing it: each kite of the deformed level-``L0`` mesh is a piecewise-bilinear map of
 the unit square (s, t), and the level-``L`` node (kite i, s = j/L, t = k/L) is that map
@@ -23,8 +23,8 @@ From a 1-point bed every point takes the parent's single value.
 import h5py
 import numpy as np
 
+from pdfem.io.bedfile import COLUMNS, read_bed, write_bed
 from pdfem.mesh.ellipse import _kite_numbering
-from pdfem.prepare.bedfile import COLUMNS, read_bed, write_bed
 from pdfem.scene.values import SceneError
 
 # Natural coordinates of the 2x2 Gauss points, in the element kernel's order

@@ -85,7 +85,7 @@ def read_grains_file(spec, base_dir, materials):
 
 def _bed_rows(path, name, spec, materials):
     """GrainRows of a bed file: every grain of the spec's material, meshes as prepared."""
-    from pdfem.prepare.bedfile import read_bed
+    from pdfem.io.bedfile import read_bed
 
     cols, nodes, vel, level, stress, state = read_bed(path, name)
     n = nodes.shape[0]

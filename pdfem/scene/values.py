@@ -7,16 +7,10 @@ Errors are :class:`SceneError` carrying the key path (``time.end``, ``grains[3].
 import math
 import re
 
-from pdfem.scene.schema import OPTIONAL, REQUIRED, Derived, Key
+from pdfem.errors import SceneError
+from pdfem.scene.schema import OPTIONAL, REQUIRED, Derived
 
 _BARE = re.compile(r"[A-Za-z0-9_-]+")
-
-
-class SceneError(Exception):
-    """A bad scene value: ``str(exc)`` is ``"key.path: what is wrong"`` on one line."""
-
-    def __init__(self, path, msg):
-        super().__init__(f"{path}: {msg}" if path else msg)
 
 
 def join(path, key):
@@ -126,14 +120,6 @@ def _check(value, key):
                 raise _Bad(f"{show(v)} is listed twice", i)
         return out
     raise AssertionError(f"unknown key kind {kind!r}")
-
-
-def check_value(value, key: Key, path):
-    """Convert and check one value against ``key``; errors name ``path``."""
-    try:
-        return _check(value, key)
-    except _Bad as exc:
-        raise _located(exc, path) from None
 
 
 def _located(exc, path):

@@ -32,6 +32,7 @@ import h5py
 import numpy as np
 
 from pdfem.errors import InputError, SimulationError
+from pdfem.parallel.mpi import barrier, broadcast, global_max
 from pdfem.study import pareto
 from pdfem.study.quantities import QUANTITIES, measure
 
@@ -172,7 +173,7 @@ class AccuracyStudy:
         # Rank 0 writes it once; every rank waits for it
         if self.comm.rank == 0 and not os.path.exists(path):
             relevel_bed(self.bed, path, setting.level, setting.rule)
-        self.comm.Barrier()
+        barrier(self.comm)
         return path
 
     def scene_of(self, setting, name, written=True):
@@ -213,8 +214,6 @@ class AccuracyStudy:
 
     def run(self, setting):
         """Run one setting (once: a setting already run returns its row); return the row."""
-        from mpi4py import MPI
-
         from pdfem.driver import run as drive
         from pdfem.solver import Simulation
 
@@ -231,12 +230,12 @@ class AccuracyStudy:
             steps = int(summary["steps"])
         except SimulationError as exc:
             status = f"failed: {exc}"
-        wall = self.comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
+        wall = global_max(self.comm, time.perf_counter() - t0)
         vals = None
         if self.comm.rank == 0:
             vals = ({k: math.nan for k, *_ in QUANTITIES} if status != "ok"
                     else measure(out, os.path.splitext(out)[0]))
-        vals = self.comm.bcast(vals, root=0)
+        vals = broadcast(self.comm, vals)
         row = {"setting": setting, "wall_s": wall, "steps": steps, "status": status,
                "run_file": out if status == "ok" else "", **vals}
         self.rows.append(row)

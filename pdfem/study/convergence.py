@@ -15,7 +15,8 @@ time the run reaches (the exact solution is evaluated there). Halving h should d
 about 4: lumped-mass bilinear quads and central differences are both second order, so the
 frequency error and with it the phase error at a fixed time go like h^2.
 
-Each run is serial (``MPI.COMM_SELF``): a single block of a few hundred elements.
+Each run is serial (one rank, :func:`pdfem.parallel.mpi.self_comm`): a single block of a few
+hundred elements.
 """
 
 import math
@@ -79,8 +80,7 @@ material = "solid"
 
 def wave_error(n, rule, periods=1.0, safety=0.5):
     """Run the standing wave on an n x n mesh; return h, the relative error, steps and t."""
-    from mpi4py import MPI
-
+    from pdfem.parallel.mpi import self_comm
     from pdfem.scene import parse_scene
     from pdfem.solver import Simulation
 
@@ -89,7 +89,7 @@ def wave_error(n, rule, periods=1.0, safety=0.5):
         store.v[:] = SPEED * mode_shape(store.x)
 
     sim = Simulation(parse_scene(wave_scene(n, rule, periods, safety), ".",
-                                 name=f"standing wave {n}x{n} {rule}"), MPI.COMM_SELF,
+                                 name=f"standing wave {n}x{n} {rule}"), self_comm(),
                      init_state=start)
     # One block, no grains: the store holds its nodes in mesh order and never reorders them
     X = sim.store.x.copy()

@@ -29,10 +29,10 @@ import time
 
 import h5py
 import numpy as np
-from mpi4py import MPI
 
 from pdfem.errors import SimulationError
 from pdfem.mesh.quality import corner_jacobians, point_jacobians
+from pdfem.parallel.mpi import alone, barrier, broadcast, global_max, global_min
 from pdfem.study.hard_cases import CASES
 
 # Largest energy-balance error a hard case may show
@@ -110,14 +110,14 @@ def case_figure(name, sim):
     if name == "fast-migration":
         grid = sim.grid
         speed = float(np.sqrt((s.v[: s.nn_own] ** 2).sum(axis=1)).max()) if s.nn_own else 0.0
-        speed = sim.comm.allreduce(speed, op=MPI.MAX)
+        speed = global_max(sim.comm, speed)
         cells = speed * sim.dt_prev / min(grid.hx, grid.hy)
         return f"{cells:.1f} cells per step, rebuilds {sim.timers.calls['migration']}"
     if name == "squeeze-50":
         grain = s.isglobal[s.node_body[: s.nn_own]] == 0
         y = s.x[: s.nn_own][grain, 1]
-        lo = sim.comm.allreduce(float(y.min()) if y.size else math.inf, op=MPI.MIN)
-        hi = sim.comm.allreduce(float(y.max()) if y.size else -math.inf, op=MPI.MAX)
+        lo = global_min(sim.comm, float(y.min()) if y.size else math.inf)
+        hi = global_max(sim.comm, float(y.max()) if y.size else -math.inf)
         r = sim.scene.resolved["grains"][0]["axes"][1]
         return f"height {100 * (hi - lo) / (2 * r):.1f} % of the initial"
     if name == "hot-conduction":
@@ -137,7 +137,7 @@ def run_one(scene, comm, out):
         status, steps = "ok", int(summary["steps"])
     except SimulationError as exc:
         sim, status, steps = None, f"failed: {exc}", 0
-    wall = comm.allreduce(time.perf_counter() - t0, op=MPI.MAX)
+    wall = global_max(comm, time.perf_counter() - t0)
     return status, steps, wall, sim
 
 
@@ -150,20 +150,19 @@ def run_case(name, folder, size, comm):
     os.makedirs(folder, exist_ok=True)
     # Rank 0 builds the scene (and writes its files), every rank parses the same dict
     doc = builder(folder, size) if comm.rank == 0 else None
-    doc = comm.bcast(doc, root=0)
+    doc = broadcast(comm, doc)
     scene = parse_scene(doc, folder, name=f"hard case {name}")
     out1, outn = os.path.join(folder, f"{name}-1.h5"), os.path.join(folder, f"{name}-n.h5")
     for p in (out1, outn):
         for suffix in ("", ".part", ".ckpt.h5"):
             if comm.rank == 0 and os.path.exists(p + suffix):
                 os.remove(p + suffix)
-    comm.Barrier()
+    barrier(comm)
     # One rank, then all
-    solo = comm.Split(0 if comm.rank == 0 else MPI.UNDEFINED, 0)
-    if comm.rank == 0:
-        status1, _, _, _ = run_one(scene, solo, out1)
-        solo.Free()
-    comm.Barrier()
+    with alone(comm) as solo:
+        if solo is not None:
+            status1, _, _, _ = run_one(scene, solo, out1)
+    barrier(comm)
     status, steps, wall, sim = run_one(scene, comm, outn)
     figure = case_figure(name, sim) if sim is not None else ""
     if comm.rank != 0:

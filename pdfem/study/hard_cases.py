@@ -14,9 +14,9 @@ from importlib import resources
 
 import numpy as np
 
+from pdfem.io.bedfile import write_bed
 from pdfem.mesh.ellipse import ellipse_mesh, place
 from pdfem.mesh.quality import jacobian_ratio
-from pdfem.prepare.bedfile import write_bed
 
 # The elastic grain of the non-shock cases (HMX-like moduli)
 GRAIN = {"model": "elastic", "density": 1900.0, "bulk": 12.7e9, "shear": 4.4e9}

@@ -20,6 +20,7 @@ import math
 import h5py
 import numpy as np
 
+from pdfem.parallel.mpi import broadcast
 from pdfem.scene.schema import HEAT_FIELDS
 from pdfem.study.accuracy import AccuracyStudy, Setting
 
@@ -132,7 +133,7 @@ class HotspotStudy:
                 else:
                     out = {"level": level, "rule": self.rule, "status": row["status"],
                            "wall_s": row["wall_s"], "steps": row["steps"]}
-            out = self.comm.bcast(out, root=0)
+            out = broadcast(self.comm, out)
             rows.append(out)
             self.log(f"[{k + 1}/{len(levels)}] {setting.label}: {row['wall_s']:.1f} s, "
                      f"{row['steps']} steps; " + (_summary(out) if out["status"] == "ok"

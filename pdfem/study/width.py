@@ -17,6 +17,7 @@ from importlib import resources
 
 import numpy as np
 
+from pdfem.parallel.mpi import barrier
 from pdfem.scene.toml_out import dumps
 
 PREP, SCENE = "shot912_prepare.toml", "shot912.toml"
@@ -183,7 +184,7 @@ def run_study(widths, seeds, seed_width, folder, comm, log, allow_huge=False):
             with open(prep_path, "w") as f:
                 f.write(dumps(prep))
             log(f"pdfem study width: {wide:g} grains wide ({width * 1e3:g} mm), seed {seed}")
-        comm.Barrier()
+        barrier(comm)
         prepare(prep_path, shot["grains_file"]["path"], comm, log=lambda s: None,
                 allow_huge=allow_huge)
         sc = parse_scene(shot, base, name=f"{SCENE} ({tag})")

@@ -452,7 +452,7 @@ def test_complete_run_files_pass_the_run_file_check(folder):
 
 def test_material_accepts_every_material_of_the_packaged_scene(tmp_path):
     """A scene that run accepts is accepted by material: its thermal keys are ignored."""
-    from pdfem.cli.run import default_scene_path
+    from pdfem.packaged import default_scene_path
     from pdfem.scene import load_scene
 
     path = default_scene_path()

@@ -23,7 +23,7 @@ import h5py
 import numpy as np
 
 from pdfem import __version__
-from pdfem.scene.values import SceneError
+from pdfem.errors import SceneError
 
 COLUMNS = ("x", "y", "a", "b", "angle")
 

@@ -12,7 +12,6 @@
 """
 
 import numpy as np
-from mpi4py import MPI
 
 from partition import CellGrid, needs_rebalance, partition
 from pdfem import build
@@ -32,7 +31,14 @@ from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
 from pdfem.mesh.quality import corner_jacobians
 from pdfem.parallel.exchange import owned_grain_cells, rebuild
-from pdfem.parallel.mpi import global_any, global_min
+from pdfem.parallel.mpi import (
+    allgather_objects,
+    array_max,
+    array_sum,
+    global_any,
+    global_min,
+    global_sum_exact,
+)
 from pdfem.store import NODE, Batch, Field, Store, core_fields
 from pdfem.timers import Timers
 
@@ -184,7 +190,7 @@ class Simulation:
         # The partition of the checkpoint's grains: cell weights summed over the ranks
         cells = owned_grain_cells(store, self.grid, self.nglobal)
         weights = np.bincount(cells, minlength=self.grid.ncell).astype(float)
-        self.comm.Allreduce(MPI.IN_PLACE, weights, op=MPI.SUM)
+        array_sum(self.comm, weights)
         self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,
                                self.grid.ny, self.comm.size)
         with self.timers.phase("migration"):
@@ -277,7 +283,7 @@ class Simulation:
         own = np.arange(self.nglobal, s.nb_own)
         cells = owned_grain_cells(s, self.grid, self.nglobal)
         w = np.bincount(cells, weights=s.ne[own], minlength=self.grid.ncell).astype(np.int64)
-        self.comm.Allreduce(MPI.IN_PLACE, w, op=MPI.SUM)
+        w = global_sum_exact(self.comm, w)
         weights = w.astype(float)
         if needs_rebalance(weights, self.owner, self.comm.size, threshold):
             self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,
@@ -352,7 +358,7 @@ class Simulation:
         red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0, self.local_stop,
                         self.local_ckpt, float(ahead)]
                        + [-e.step_minimum(self) for e in self.minima])
-        self.comm.Allreduce(MPI.IN_PLACE, red, op=MPI.MAX)
+        red = array_max(self.comm, red)
         self.rebuild_next = bool(red[4] > 0)
         for e, value in zip(self.minima, red[5:], strict=True):
             e.set_step_minimum(self, -value)
@@ -360,7 +366,7 @@ class Simulation:
         self.checkpoint_requested = self.checkpoint_requested or red[3] > 0
         self.local_ckpt = 0.0
         if red[1] > 0:
-            msgs = [m for m in self.comm.allgather(self._fail_msg) if m]
+            msgs = [m for m in allgather_objects(self.comm, self._fail_msg) if m]
             raise SimulationError(f"step {self.nstep}, t={self.t:.6e} s: {msgs[0]}")
         dt_stable = -red[0]
         # No clipping to output times: an abrupt change of dt would spoil the energy identity

@@ -22,7 +22,6 @@ import numpy as np
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact_law import DT_FACTOR
 from pdfem.kernels.stable import q4_stable_dt
-from pdfem.parallel.exchange import rebuild
 from pdfem.parallel.mpi import global_min
 from pdfem.store import Store
 
@@ -100,7 +99,7 @@ class Guards:
         store = Store(sim.fields, snap.batch, snap.nb_own)
         sim.owner = snap.owner.copy()
         with sim.timers.phase("migration"):
-            sim.store, sim.halo = rebuild(sim.comm, store, sim.grid, sim.owner, sim.nglobal)
+            sim.store, sim.halo = sim.rebuild(store)
         sim.nstep, sim.t, sim.dt, sim.dt_prev = snap.nstep, snap.t, snap.dt, snap.dt_prev
         s = sim.store
         sim.du = np.zeros_like(s.v)

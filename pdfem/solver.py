@@ -30,7 +30,7 @@ from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
 from pdfem.mesh.quality import corner_jacobians
-from pdfem.parallel.exchange import owned_grain_cells, rebuild
+from pdfem.parallel.exchange import cell_reach, owned_grain_cells, rebuild
 from pdfem.parallel.mpi import (
     allgather_objects,
     array_max,
@@ -172,7 +172,7 @@ class Simulation:
         if init_state is not None:
             init_state(self, store)
         with self.timers.phase("migration"):
-            self.store, self.halo = rebuild(comm, store, self.grid, self.owner, self.nglobal)
+            self.store, self.halo = self.rebuild(store)
 
     def _build_restart(self, path):
         """Replace the initial bodies by a checkpoint's: every rank reads the global bodies
@@ -194,7 +194,7 @@ class Simulation:
         self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,
                                self.grid.ny, self.comm.size)
         with self.timers.phase("migration"):
-            store, self.halo = rebuild(self.comm, store, self.grid, self.owner, self.nglobal)
+            store, self.halo = self.rebuild(store)
         if ck.contact_force is not None:
             # The owned nodes' forces for the first frame; the store without them
             ck.contact_force = getattr(store, RESTART_FC.name)[: store.nn_own].copy()
@@ -258,8 +258,7 @@ class Simulation:
         if self.rebuild_next:
             with self.timers.phase("migration"):
                 self._rebalance()
-                self.store, self.halo = rebuild(self.comm, s, self.grid, self.owner,
-                                                self.nglobal)
+                self.store, self.halo = self.rebuild(s)
             s = self.store
             self.f = np.zeros_like(s.v)
             self.fc = self.contact_force_array()
@@ -271,6 +270,13 @@ class Simulation:
                 self.halo.refresh([getattr(s, n) for n in self.halo_fields])
         # Step increments of ghosts are derived exactly as their owners computed them
         self.du = self.dt * s.v
+
+    def rebuild(self, store):
+        """Migrate grains to their cells' owners and rebuild the ghosts of a ``store``, with
+        the cell reach of its grains (collective); returns (store, halo). The reach is kept
+        for the contact candidates (:func:`pdfem.parallel.exchange.cell_reach`)."""
+        self.reach = cell_reach(self.comm, store, self.grid, self.nglobal, self.skin)
+        return rebuild(self.comm, store, self.grid, self.owner, self.nglobal, self.reach)
 
     def _rebalance(self):
         """At a rebuild: new cell owners when the element-count load of the ranks is more

@@ -188,7 +188,7 @@ class Contact(Effect):
         body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
         owned = (np.arange(g0, s.nbody) < s.nb_own).astype(np.int8)
         pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], sim.grid.nx, sim.grid.ny,
-                            sim.skin)
+                            sim.skin, sim.reach)
         self.gpairs = pairs + g0
         reach = sim.skin * (1.0 + REACH_SLACK)
         epairs = self._element_pairs(sim, bbox, self.gpairs, reach)

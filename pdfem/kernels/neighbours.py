@@ -20,10 +20,11 @@ def body_boxes(bbox, estart, ne, b0, b1, out):
 
 
 @njit(cache=True)
-def grain_pairs(cell, owned, box, nx, ny, skin):
-    """Candidate grain pairs: grains in the same or neighbouring cells whose boxes are within
-    ``skin``; at least one grain of each pair is owned. cell (n,) is each grain's centroid
-    cell (-1 to ignore), owned (n,) a 0/1 flag, box (n, 4). Returns (m, 2) local indices."""
+def grain_pairs(cell, owned, box, nx, ny, skin, reach):
+    """Candidate grain pairs: grains whose centroid cells are at most ``reach`` cells apart
+    in x and in y (reach 1: the 3x3 block) and whose boxes are within ``skin``; at least one
+    grain of each pair is owned. cell (n,) is each grain's centroid cell (-1 to ignore),
+    owned (n,) a 0/1 flag, box (n, 4). Returns (m, 2) local indices."""
     n = cell.shape[0]
     ncell = nx * ny
     # Counting sort of grains by cell
@@ -39,7 +40,7 @@ def grain_pairs(cell, owned, box, nx, ny, skin):
         if cell[i] >= 0:
             order[fill[cell[i]]] = i
             fill[cell[i]] += 1
-    # Owned grains against the 3x3 block of cells around them
+    # Owned grains against the (2 reach + 1)^2 block of cells around them
     cap = 16 * n + 16
     out = np.empty((cap, 2), np.int64)
     m = 0
@@ -48,8 +49,8 @@ def grain_pairs(cell, owned, box, nx, ny, skin):
             continue
         cx = cell[i] % nx
         cy = cell[i] // nx
-        for dy in range(-1, 2):
-            for dx in range(-1, 2):
+        for dy in range(-reach, reach + 1):
+            for dx in range(-reach, reach + 1):
                 jx = cx + dx
                 jy = cy + dy
                 if jx < 0 or jy < 0 or jx >= nx or jy >= ny:

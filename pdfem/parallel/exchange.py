@@ -2,16 +2,21 @@
 
 A rebuild runs in two phases. Phase A sends every owned grain whose centroid lies in a cell
 of another rank to that rank, with all of its state and its contact history. Phase B sends
-a copy of every owned grain to each rank owning a cell of its 3x3 cell neighbourhood: those
-copies are the ghosts. Between rebuilds only node positions and velocities (and the fields
-effects register) of ghosts are refreshed, from owner to ghost, every step.
+a copy of every owned grain to each rank owning a cell of its cell neighbourhood: those
+copies are the ghosts. The neighbourhood is the (2 r + 1)^2 block of cells around the
+grain's, r the reach (:func:`cell_reach`): 1 (the 3x3 block) while the grains are no larger
+than the cell size allows, more once they have grown (flattened grains of a compacted bed).
+Between rebuilds only node positions and velocities (and the fields effects register) of
+ghosts are refreshed, from owner to ghost, every step.
 """
+
+import math
 
 import numpy as np
 
 from pdfem.kernels.centroids import body_centroids
 from pdfem.parallel.halo import Halo
-from pdfem.parallel.mpi import alltoallv
+from pdfem.parallel.mpi import alltoallv, global_max
 from pdfem.store import Batch, Store, ranges
 
 
@@ -23,13 +28,37 @@ def owned_grain_cells(store, grid, nglobal):
     return grid.cell_of(cent)
 
 
-def neighbour_ranks(grid, owner, cells):
-    """(n, 9) ranks owning the 3x3 cell block around each cell (clipped at the grid edge)."""
+def cell_reach(comm, store, grid, nglobal, skin):
+    """Cells apart (in x and in y) that two grains within ``skin`` of each other can have
+    their centroids, at most, over every rank (collective): two boxes within skin have
+    centroids at most D_i + D_j + skin apart per axis, D the distance from a grain's centroid
+    to the farthest side of its box, and points that far apart lie at most
+    ceil(distance / cell width) cells apart. At least 1."""
+    n = store.nb_own - nglobal
+    far = 0.0
+    if n:
+        cent = np.empty((n, 2))
+        body_centroids(store.x, store.nstart, store.nn, nglobal, store.nb_own, cent)
+        first = store.nstart[nglobal:store.nb_own]
+        x = store.x[: store.nn_own]
+        lo = np.minimum.reduceat(x, first, axis=0)
+        hi = np.maximum.reduceat(x, first, axis=0)
+        far_x = np.maximum(cent[:, 0] - lo[:, 0], hi[:, 0] - cent[:, 0]).max() / grid.hx
+        far_y = np.maximum(cent[:, 1] - lo[:, 1], hi[:, 1] - cent[:, 1]).max() / grid.hy
+        far = max(far_x, far_y)
+    skin_cells = skin / min(grid.hx, grid.hy)
+    return max(1, math.ceil(2.0 * global_max(comm, far) + skin_cells))
+
+
+def neighbour_ranks(grid, owner, cells, reach=1):
+    """(n, (2 reach + 1)^2) ranks owning the cell block of ``reach`` cells around each cell
+    (clipped at the grid edge)."""
     ix, iy = cells % grid.nx, cells // grid.nx
-    out = np.empty((cells.shape[0], 9), np.int64)
+    side = 2 * reach + 1
+    out = np.empty((cells.shape[0], side * side), np.int64)
     k = 0
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
+    for dy in range(-reach, reach + 1):
+        for dx in range(-reach, reach + 1):
             jx = np.clip(ix + dx, 0, grid.nx - 1)
             jy = np.clip(iy + dy, 0, grid.ny - 1)
             out[:, k] = owner[jx + grid.nx * jy]
@@ -52,8 +81,9 @@ def _history_rows(batches, fields, keep_gids, global_gids):
     return keys[sel], vals[sel]
 
 
-def rebuild(comm, store, grid, owner, nglobal):
-    """Migrate grains to the owners of their cells and rebuild the ghosts.
+def rebuild(comm, store, grid, owner, nglobal, reach=1):
+    """Migrate grains to the owners of their cells and rebuild the ghosts of the cell
+    neighbourhoods of ``reach`` cells.
 
     Returns the new :class:`Store` and its :class:`Halo`. The first ``nglobal`` local bodies
     are the global bodies, identical on every rank; they are neither migrated nor ghosted.
@@ -82,7 +112,7 @@ def rebuild(comm, store, grid, owner, nglobal):
     # Phase B: ghosts for every rank owning a cell next to an owned grain's cell
     base = Store(fields, Batch.concat(fields, [glob, sorted_owned]), nglobal + owned.nbody)
     cells = owned_grain_cells(base, grid, nglobal)
-    nbr = neighbour_ranks(grid, owner, cells)
+    nbr = neighbour_ranks(grid, owner, cells, reach)
     send_bodies = {}
     bufs = []
     for r in range(size):

@@ -6,7 +6,7 @@ import re
 
 import pytest
 
-from tests.e2e.test_cli import pdfem
+from tests.helpers import pdfem
 
 NUM = r"(\d+(?:\.\d+)?(?:[eE][-+]?\d+)?)"
 

@@ -11,7 +11,7 @@ from pdfem.kernels.broad_phase import element_bboxes, pairs_from_bboxes
 from pdfem.kernels.contact import C_ACTIVE, NRES, element_pair_forces, element_wall_forces
 from pdfem.scene import parse_scene
 from pdfem.solver import Simulation
-from tests.scenes import ELASTIC, collision, settling_bed
+from tests.scenes import collision, elastic, settling_bed
 
 
 def _contact(sim):
@@ -103,37 +103,25 @@ def test_damped_traction_and_its_time_step():
     assert r == pytest.approx(np.sqrt(1.25) - 0.5, rel=1e-14)
 
 
-REST = """
-[domain]
-box = [0.0, 0.0, 0.002, 0.002]
-[time]
-end = 1.0e-4
-safety = 0.5
-[element]
-level = 2
-[gravity]
-g = [0.0, -1.0e4]
-[damping]
-gamma = 3.0e5
-[contact]
-kn0 = 1.0e13
-delta_max = 2.0e-5
-[walls]
-bottom = "frictionless"
-[output]
-path = "rest.h5"
-interval = 1.0e-4
-""" + ELASTIC + """
-[[grains]]
-center = [0.001, 0.0002]
-axes = [2.5e-4, 2.0e-4]
-angle = 0.0
-material = "grain"
-"""
+def _rest():
+    """One grain dropped onto a frictionless floor, damped."""
+    return {
+        "domain": {"box": [0.0, 0.0, 0.002, 0.002]},
+        "time": {"end": 1.0e-4, "safety": 0.5},
+        "element": {"level": 2},
+        "gravity": {"g": [0.0, -1.0e4]},
+        "damping": {"gamma": 3.0e5},
+        "contact": {"kn0": 1.0e13, "delta_max": 2.0e-5},
+        "walls": {"bottom": "frictionless"},
+        "output": {"path": "rest.h5", "interval": 1.0e-4},
+        "materials": {"grain": elastic()},
+        "grains": [{"center": [0.001, 0.0002], "axes": [2.5e-4, 2.0e-4], "angle": 0.0,
+                    "material": "grain"}],
+    }
 
 
 def test_grain_at_rest_on_the_floor_carries_its_weight(tmp_path):
-    sim = Simulation(parse_scene(REST, str(tmp_path)), MPI.COMM_SELF)
+    sim = Simulation(parse_scene(_rest(), str(tmp_path)), MPI.COMM_SELF)
     weight = sim.store.m.sum() * 1.0e4
     pe0 = global_terms(sim)["potential"]
     # At rest: kinetic energy below 1e-6 of the potential energy drop for 10 samples running
@@ -151,32 +139,19 @@ def test_grain_at_rest_on_the_floor_carries_its_weight(tmp_path):
 
 
 def _incline(theta, mu, g=1.0e4, end=4.0e-4):
+    """A block on a frictional floor (friction mu), gravity tilted by theta."""
     gx, gy = float(g * np.sin(theta)), float(-g * np.cos(theta))
-    return f"""
-[domain]
-box = [0.0, 0.0, 0.01, 0.002]
-[time]
-end = {end}
-safety = 0.5
-[gravity]
-g = [{gx!r}, {gy!r}]
-[contact]
-kn0 = 1.0e13
-delta_max = 2.0e-5
-[walls]
-bottom = "frictional"
-friction = {mu}
-[output]
-path = "incline.h5"
-interval = {end}
-{ELASTIC}
-[[blocks]]
-name = "block"
-box = [0.001, 0.0, 0.002, 0.00025]
-nx = 4
-ny = 1
-material = "grain"
-"""
+    return {
+        "domain": {"box": [0.0, 0.0, 0.01, 0.002]},
+        "time": {"end": end, "safety": 0.5},
+        "gravity": {"g": [gx, gy]},
+        "contact": {"kn0": 1.0e13, "delta_max": 2.0e-5},
+        "walls": {"bottom": "frictional", "friction": mu},
+        "output": {"path": "incline.h5", "interval": end},
+        "materials": {"grain": elastic()},
+        "blocks": [{"name": "block", "box": [0.001, 0.0, 0.002, 0.00025], "nx": 4, "ny": 1,
+                    "material": "grain"}],
+    }
 
 
 def _block_velocity_history(sim):
@@ -251,10 +226,11 @@ def test_contact_below_dt_min_names_the_bodies(tmp_path):
     """A contact that needs a step below time.dt_min stops the run naming body and element."""
     from pdfem.errors import SimulationError
 
-    text = collision(v=20.0, end=4e-6).replace("safety = 0.5", "safety = 0.5\ndt_min = 1.0e-8")
+    doc = collision(v=20.0, end=4e-6)
+    doc["time"]["dt_min"] = 1.0e-8
     with pytest.raises(SimulationError, match=r"limited by contact\.kn0 on the edges of body "
                                               r"\d+ element \d+\) is below time\.dt_min"):
-        sim = Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
+        sim = Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF)
         while sim.t < sim.t_end:
             sim.step()
 

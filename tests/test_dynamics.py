@@ -7,7 +7,7 @@ from mpi4py import MPI
 from pdfem.kernels import params as P
 from pdfem.scene import parse_scene
 from pdfem.solver import Simulation
-from tests.scenes import ELASTIC, stretched_block
+from tests.scenes import elastic, stretched_block
 
 RHO, K, G = 1900.0, 12.7e9, 4.4e9
 CP = np.sqrt((K + 4 * G / 3) / RHO)
@@ -17,21 +17,10 @@ CP = np.sqrt((K + 4 * G / 3) / RHO)
 def test_p_wave_arrives_at_L_over_cp(tmp_path, rule):
     # A bar in uniaxial strain (rollers top and bottom), velocity step at the left end
     length, v0 = 0.02, 1.0
-    rollers = """
-[[bc]]
-body = "bar"
-nodes = "top"
-type = "roller"
-
-[[bc]]
-body = "bar"
-nodes = "bottom"
-type = "roller"
-"""
-    text = stretched_block(end=1.2 * length / CP, rule=rule, nx=400, ny=2, v=v0,
-                           extra=rollers)
+    doc = stretched_block(end=float(1.2 * length / CP), rule=rule, nx=400, ny=2, v=v0)
+    doc["bc"] += [{"body": "bar", "nodes": side, "type": "roller"} for side in ("top", "bottom")]
     # Fixed left end, pulled right end: the tension front reaches the left end at L/c_p
-    sim = Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
+    sim = Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF)
     left = np.nonzero(sim.store.elem_loc % 400 == 0)[0]
     plateau = RHO * CP * v0
     arrival = None
@@ -46,33 +35,21 @@ type = "roller"
 
 def test_free_vibration_conserves_energy(tmp_path):
     # One undamped grain, breathing and shearing from an initial velocity field
-    text = f"""
-[domain]
-box = [-0.002, -0.002, 0.002, 0.002]
-[time]
-end = 1.0
-safety = 0.5
-max_steps = 10000
-[element]
-rule = "2x2"
-level = 2
-[output]
-path = "vib.h5"
-interval = 1.0
-energy_interval = 1.0
-{ELASTIC}
-[[grains]]
-center = [0.0, 0.0]
-axes = [5.0e-4, 3.0e-4]
-material = "grain"
-"""
+    doc = {
+        "domain": {"box": [-0.002, -0.002, 0.002, 0.002]},
+        "time": {"end": 1.0, "safety": 0.5, "max_steps": 10000},
+        "element": {"rule": "2x2", "level": 2},
+        "output": {"path": "vib.h5", "interval": 1.0, "energy_interval": 1.0},
+        "materials": {"grain": elastic()},
+        "grains": [{"center": [0.0, 0.0], "axes": [5.0e-4, 3.0e-4], "material": "grain"}],
+    }
 
     def shake(sim, store):
         x = store.x
         store.v[:, 0] = 20.0 * x[:, 0] / 5e-4 + 10.0 * x[:, 1] / 3e-4
         store.v[:, 1] = -15.0 * x[:, 1] / 3e-4
 
-    sim = Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF, init_state=shake)
+    sim = Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF, init_state=shake)
     from pdfem.energy import global_terms
 
     e0 = None

@@ -46,9 +46,14 @@ from hypothesis import strategies as st
 
 from pdfem.cli import main
 from pdfem.scene.toml_out import dumps
-from tests.e2e.test_bad_input import EVERY_FIELD, GOOD
-from tests.scenes import SHOCK_MATERIALS, small_prepare
-from tests.test_fuzz_scenes import mutants
+from tests.fuzz import mutants
+from tests.scenes import (
+    checkpointed_grains,
+    every_field_shock,
+    shock_materials,
+    small_prepare,
+    toml,
+)
 
 # Examples per test: the quick default of the suite, or the long mode's count
 LONG = int(os.environ.get("PDFEM_FUZZ_EXAMPLES", "0"))
@@ -184,7 +189,7 @@ def test_mutated_prepare_scene_prepares_or_exits_2(mutant):
 
 # ---------------------------------------------------------------- material
 
-MATERIAL = SHOCK_MATERIALS
+MATERIAL = toml({"materials": shock_materials()})
 # Strain-path CSV files: valid, and broken in one way each
 CSV = {"good": "exx,eyy,exy,ezz\n-0.01,0,0,0\n0,0,0,0\n",
        "empty": "", "header only": "exx,eyy,exy,ezz\n", "no header": "-0.01,0,0,0\n",
@@ -280,8 +285,8 @@ def test_mutated_material_call_runs_or_exits_2(call):
 def runs(tmp_path_factory):
     """A real run file (run.h5) and a shock run with every frame field (shock.h5)."""
     d = tmp_path_factory.mktemp("fuzzruns")
-    for name, text in (("run", GOOD), ("shock", EVERY_FIELD)):
-        (d / f"{name}.toml").write_text(text)
+    for name, doc in (("run", checkpointed_grains()), ("shock", every_field_shock())):
+        (d / f"{name}.toml").write_text(toml(doc))
         status, _, err = _cli(["run", d / f"{name}.toml", "-o", d / f"{name}.h5", "--quiet"])
         assert status == 0, err
     return d

@@ -21,13 +21,14 @@ def test_block_sides():
 
 
 def _sim(tmp_path, gauges):
-    text = drifting_grains(n=4, end=1e-6, out=str(tmp_path / "r.h5"), extra=gauges)
-    return Simulation(parse_scene(text, tmp_path), MPI.COMM_SELF)
+    """Four drifting grains with the gauges ``gauges`` (a list of dicts)."""
+    doc = drifting_grains(n=4, end=1e-6, out=str(tmp_path / "r.h5"), extra={"gauges": gauges})
+    return Simulation(parse_scene(doc, tmp_path), MPI.COMM_SELF)
 
 
 def test_point_gauge_reads_the_grain_it_sits_in(tmp_path):
     # Grain 0 is centred at (0.006, 0.0015): a rigid drift, so the gauge reads its velocity
-    sim = _sim(tmp_path, '[[gauges]]\nname = "g"\npoint = [0.006, 0.0015]\n')
+    sim = _sim(tmp_path, [{"name": "g", "point": [0.006, 0.0015]}])
     g = Gauges(sim)
     assert g.sets[0][0] == 0
     vals = g.values(sim)
@@ -43,9 +44,9 @@ def test_point_gauge_reads_the_grain_it_sits_in(tmp_path):
 
 def test_point_outside_every_element_is_an_input_error(tmp_path):
     """The error names the scene file and the key."""
-    gauge = '[[gauges]]\nname = "g"\npoint = [0.0239, 0.0059]\n'
-    text = drifting_grains(n=4, end=1e-6, out=str(tmp_path / "r.h5"), extra=gauge)
-    sim = Simulation(parse_scene(text, tmp_path, name="gauged.toml"), MPI.COMM_SELF)
+    gauge = {"gauges": [{"name": "g", "point": [0.0239, 0.0059]}]}
+    doc = drifting_grains(n=4, end=1e-6, out=str(tmp_path / "r.h5"), extra=gauge)
+    sim = Simulation(parse_scene(doc, tmp_path, name="gauged.toml"), MPI.COMM_SELF)
     with pytest.raises(InputError, match=r"^gauged.toml: gauges\[0\]\.point: no element "
                        "contains"):
         Gauges(sim)

@@ -17,60 +17,43 @@ from pdfem.scene import parse_scene
 from pdfem.solver import Simulation
 from tests.scenes import collision
 
-SAND = """
-[materials.sand]
-model = "cap"
-density = 1700.0
-bulk = 459673449.19
-shear = 275790280.0
-A = 1723689.25
-B = 9.717528841117968e-08
-C = 1241056.26
-D = 9.717528841117968e-08
-R = 2.5
-W = 0.066
-kappa0 = 0.0
-specific_heat = 800.0
-conductivity = 0.3
-expansion = 1.0e-5
-"""
 
-# A material without thermal properties
-PLAIN_M = """[materials.m]
-density = 1900.0
-bulk = 12.7e9
-shear = 4.4e9"""
+def sand():
+    """A cap sand with thermal properties."""
+    return {"model": "cap", "density": 1700.0, "bulk": 459673449.19, "shear": 275790280.0,
+            "A": 1723689.25, "B": 9.717528841117968e-08, "C": 1241056.26,
+            "D": 9.717528841117968e-08, "R": 2.5, "W": 0.066, "kappa0": 0.0,
+            "specific_heat": 800.0, "conductivity": 0.3, "expansion": 1.0e-5}
 
 
-def block_scene(material, box, nx, ny, end, extra="", out="run.h5"):
-    """One block body and the given material table (named m) with optional tables."""
-    return f"""
-[domain]
-box = [{box[0]}, {box[1]}, {box[2]}, {box[3]}]
-
-[time]
-end = {end}
-safety = 0.5
-
-[output]
-path = "{out}"
-interval = {end / 4}
-energy_interval = {end / 40}
-
-{material}
-
-[[blocks]]
-name = "b"
-box = [{box[0]}, {box[1]}, {box[2]}, {box[3]}]
-nx = {nx}
-ny = {ny}
-material = "m"
-{extra}
-"""
+def plain_m(**thermal):
+    """An elastic material without thermal properties (``thermal``: keys to add)."""
+    return {"density": 1900.0, "bulk": 12.7e9, "shear": 4.4e9, **thermal}
 
 
-def simulate(text, tmp_path):
-    return Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
+def block_scene(material, box, nx, ny, end, extra=None, out="run.h5"):
+    """One block body of the material dict ``material`` (named m), with the tables of
+    ``extra`` (a dict) added."""
+    doc = {
+        "domain": {"box": list(box)},
+        "time": {"end": end, "safety": 0.5},
+        "output": {"path": out, "interval": end / 4, "energy_interval": end / 40},
+        "materials": {"m": material},
+        "blocks": [{"name": "b", "box": list(box), "nx": nx, "ny": ny, "material": "m"}],
+    }
+    for key, value in (extra or {}).items():
+        assert key not in doc, key
+        doc[key] = value
+    return doc
+
+
+def _bc(nodes, kind, **more):
+    """A boundary condition on the nodes ``nodes`` of block b."""
+    return {"body": "b", "nodes": nodes, "type": kind, **more}
+
+
+def simulate(doc, tmp_path):
+    return Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF)
 
 
 # ---- kernels -------------------------------------------------------------------------------
@@ -113,15 +96,11 @@ def test_conduction_along_a_bar_matches_the_analytic_decay(tmp_path):
     length, rho, c, k = 0.01, 1000.0, 1000.0, 1.0e4
     kappa = k / (rho * c)
     tau = length**2 / (kappa * np.pi**2)
-    mat = f"""[materials.m]
-density = {rho}
-bulk = 1.0e6
-shear = 6.0e5
-specific_heat = {c}
-conductivity = {k}"""
-    text = block_scene(mat, (0.0, 0.0, length, 0.001), 40, 4, 0.5 * tau,
-                       extra="[heat]\ninitial = 300.0\n[conduction]\n")
-    sim = simulate(text, tmp_path)
+    mat = {"density": rho, "bulk": 1.0e6, "shear": 6.0e5, "specific_heat": c,
+           "conductivity": k}
+    doc = block_scene(mat, (0.0, 0.0, length, 0.001), 40, 4, 0.5 * tau,
+                       extra={"heat": {"initial": 300.0}, "conduction": {}})
+    sim = simulate(doc, tmp_path)
     s = sim.store
     s.T[:] = 300.0 + 10.0 * np.cos(np.pi * s.x[:, 0] / length)
     while sim.t < sim.t_end:
@@ -133,38 +112,17 @@ conductivity = {k}"""
 
 
 def compressed_sand(tmp_path, extra, end=2.0e-5, v=-1.0):
-    """A sand block in uniaxial strain: fixed bottom, rollers at the sides, top pushed down."""
-    bcs = f"""
-[[bc]]
-body = "b"
-nodes = "bottom"
-type = "fixed"
-
-[[bc]]
-body = "b"
-nodes = "left"
-type = "roller"
-
-[[bc]]
-body = "b"
-nodes = "right"
-type = "roller"
-
-[[bc]]
-body = "b"
-nodes = "top"
-type = "velocity"
-dof = "y"
-velocity = [0.0, {v}]
-"""
-    text = block_scene(SAND.replace("sand", "m"), (0.0, 0.0, 0.001, 0.001), 4, 4, end,
-                       extra=bcs + extra)
-    return simulate(text, tmp_path)
+    """A sand block in uniaxial strain: fixed bottom, rollers at the sides, top pushed down;
+    ``extra``: more tables (a dict)."""
+    bcs = [_bc("bottom", "fixed"), _bc("left", "roller"), _bc("right", "roller"),
+           _bc("top", "velocity", dof="y", velocity=[0.0, v])]
+    doc = block_scene(sand(), (0.0, 0.0, 0.001, 0.001), 4, 4, end, extra={"bc": bcs, **extra})
+    return simulate(doc, tmp_path)
 
 
 def test_adiabatic_block_heats_by_beta_wp_over_rho_c(tmp_path):
-    sim = compressed_sand(tmp_path, "[heat]\ninitial = 300.0\n[dissipation_heating]\n"
-                          "beta = 0.8\n")
+    sim = compressed_sand(tmp_path, {"heat": {"initial": 300.0},
+                                     "dissipation_heating": {"beta": 0.8}})
     while sim.t < sim.t_end:
         sim.step()
     s = sim.store
@@ -182,16 +140,13 @@ def test_adiabatic_elastic_compression_heats_by_3_alpha_t0_p_over_rho_c(tmp_path
     without conduction, heats by dT = 3 alpha T0 p / (rho c) (p its pressure), and the
     balance, which pays that heat from the coupling energy -3 alpha T p A, closes."""
     rho, c, alpha, t0 = 1900.0, 1000.0, 5.0e-5, 300.0
-    mat = (PLAIN_M + f"\nspecific_heat = {c}\nexpansion = {alpha}").replace(
-        "density = 1900.0", f"density = {rho}")
-    bcs = "".join(f'\n[[bc]]\nbody = "b"\nnodes = "{n}"\ntype = "roller"\n'
-                  for n in ("left", "right"))
-    bcs += ('\n[[bc]]\nbody = "b"\nnodes = "bottom"\ntype = "fixed"\n'
-            '\n[[bc]]\nbody = "b"\nnodes = "top"\ntype = "velocity"\ndof = "y"\n'
-            'velocity = [0.0, -0.05]\n')
-    extra = f"[heat]\ninitial = {t0}\n[thermoelastic]\n[thermal_expansion]\n" + bcs
-    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 4, 4, 2.0e-5, extra=extra)
-    sim = simulate(text, tmp_path)
+    mat = plain_m(specific_heat=c, expansion=alpha)
+    mat["density"] = rho
+    bcs = [_bc("left", "roller"), _bc("right", "roller"), _bc("bottom", "fixed"),
+           _bc("top", "velocity", dof="y", velocity=[0.0, -0.05])]
+    extra = {"heat": {"initial": t0}, "thermoelastic": {}, "thermal_expansion": {}, "bc": bcs}
+    doc = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 4, 4, 2.0e-5, extra=extra)
+    sim = simulate(doc, tmp_path)
     summary = run(sim, str(tmp_path / "te.h5"), quiet=True)
     s = sim.store
     p = -(s.sig[:, :, 0] + s.sig[:, :, 1] + s.sig[:, :, 3]).mean(axis=1) / 3.0
@@ -209,13 +164,12 @@ def test_a_heat_source_that_no_mechanics_pays_for_trips_the_energy_guard(tmp_pat
     """A spurious source (here: the dissipation heating counted twice, through a test-only
     wrapper of the heat update, booked like every source) is seen by the balance: the drift
     guard stops the run. The same run without it closes within 1 %."""
-    extra = "[heat]\ninitial = 300.0\n[dissipation_heating]\nbeta = 0.8\n"
+    extra = {"heat": {"initial": 300.0}, "dissipation_heating": {"beta": 0.8}}
     sim = compressed_sand(tmp_path, extra, end=4.0e-5)
     summary = run(sim, str(tmp_path / "good.h5"), quiet=True)
     assert summary["balance_error"] < 0.01
 
-    sim = compressed_sand(tmp_path, extra.replace("[heat]", "[guards]\nenergy_drift = 0.05\n"
-                                                  "\n[heat]"), end=4.0e-5)
+    sim = compressed_sand(tmp_path, {"guards": {"energy_drift": 0.05}, **extra}, end=4.0e-5)
     heat, s = sim.heat, sim.store
     plain = type(heat).heat
     last = s.ewp.copy()
@@ -236,25 +190,12 @@ def test_thermoelastic_block_expands_by_the_thermal_strain(tmp_path):
     """A free elastic block held at T0 + 100 K expands in plane strain by (1 + nu) alpha dT."""
     kb, gs, alpha = 12.7e9, 4.4e9, 1.0e-4
     nu = (3 * kb - 2 * gs) / (2 * (3 * kb + gs))
-    mat = f"""[materials.m]
-density = 1900.0
-bulk = {kb}
-shear = {gs}
-specific_heat = 1000.0
-expansion = {alpha}"""
-    heat = """
-[heat]
-initial = 300.0
-[thermal_expansion]
-[thermoelastic]
-[damping]
-gamma = 4.0e6
-[[thermal_bc]]
-body = "b"
-temperature = 400.0
-"""
-    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 4, 4, 6.0e-6, extra=heat)
-    sim = simulate(text, tmp_path)
+    mat = {"density": 1900.0, "bulk": kb, "shear": gs, "specific_heat": 1000.0,
+           "expansion": alpha}
+    heat = {"heat": {"initial": 300.0}, "thermal_expansion": {}, "thermoelastic": {},
+            "damping": {"gamma": 4.0e6}, "thermal_bc": [{"body": "b", "temperature": 400.0}]}
+    doc = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 4, 4, 6.0e-6, extra=heat)
+    sim = simulate(doc, tmp_path)
     s = sim.store
     w0 = s.x[:, 0].max() - s.x[:, 0].min()
     while sim.t < sim.t_end:
@@ -265,9 +206,8 @@ temperature = 400.0
 
 
 def test_without_heat_no_temperature_exists(tmp_path):
-    mat = PLAIN_M
-    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, out="cold.h5")
-    sim = simulate(text, tmp_path)
+    doc = block_scene(plain_m(), (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, out="cold.h5")
+    sim = simulate(doc, tmp_path)
     assert not hasattr(sim.store, "T") and sim.heat is None
     assert sim.effect_names == []
     run(sim, str(tmp_path / "cold.h5"), quiet=True)
@@ -279,9 +219,9 @@ def test_without_heat_no_temperature_exists(tmp_path):
 
 def test_energy_balance_closes_with_heat_on(tmp_path):
     """Plastic heating, conduction, thermo-elastic coupling and thermal expansion together."""
-    sim = compressed_sand(tmp_path, "[heat]\ninitial = 300.0\n[conduction]\n"
-                          "[dissipation_heating]\n[thermoelastic]\n[thermal_expansion]\n",
-                          end=4.0e-5)
+    sim = compressed_sand(tmp_path, {"heat": {"initial": 300.0}, "conduction": {},
+                                     "dissipation_heating": {}, "thermoelastic": {},
+                                     "thermal_expansion": {}}, end=4.0e-5)
     out = tmp_path / "hot.h5"
     summary = run(sim, str(out), quiet=True)
     with h5py.File(out) as f:
@@ -310,20 +250,21 @@ def test_energy_balance_closes_with_heat_on(tmp_path):
     assert terms["heat_paid"][-1] == pytest.approx(0.9 * plastic[-1], rel=1e-9)
 
 
+def _oblique_and_thermal(doc):
+    """The collision scene ``doc`` changed: the left grain also moves up at 8 m/s, and the
+    grain material conducts heat."""
+    assert doc["grains"][0]["velocity"] == [20.0, 0.0]
+    doc["grains"][0]["velocity"] = [20.0, 8.0]
+    doc["materials"]["grain"].update(specific_heat=1000.0, conductivity=0.4)
+
+
 def test_contact_heat_balance_and_friction(tmp_path):
     """Two grains collide obliquely with friction: friction heats both, energy closes."""
-    text = collision(v=20.0, mu=0.5, end=6e-6, extra="""
-[heat]
-initial = 300.0
-[conduction]
-[contact_conductance]
-h = 1.0e7
-[friction_heating]
-""")
-    text = text.replace('velocity = [20.0, 0.0]', 'velocity = [20.0, 8.0]')
-    text = text.replace('shear = 4.4e9', 'shear = 4.4e9\nspecific_heat = 1000.0\n'
-                        'conductivity = 0.4', 1)
-    sim = simulate(text, tmp_path)
+    doc = collision(v=20.0, mu=0.5, end=6e-6, extra={
+        "heat": {"initial": 300.0}, "conduction": {}, "contact_conductance": {"h": 1.0e7},
+        "friction_heating": {}})
+    _oblique_and_thermal(doc)
+    sim = simulate(doc, tmp_path)
     out = tmp_path / "c.h5"
     run(sim, str(out), quiet=True)
     with h5py.File(out) as f:
@@ -340,17 +281,10 @@ def test_per_contact_heat_is_h_width_delta_t(tmp_path):
     """The per-contact output's heat: with each grain at a uniform temperature, a contact
     passes h w (T_B - T_A) from B into A (w its width), whatever the friction does."""
     h = 1.0e7
-    text = collision(v=20.0, mu=0.5, end=6e-6, extra=f"""
-[heat]
-initial = 300.0
-[contact_conductance]
-h = {h!r}
-[friction_heating]
-""")
-    text = text.replace('velocity = [20.0, 0.0]', 'velocity = [20.0, 8.0]')
-    text = text.replace('shear = 4.4e9', 'shear = 4.4e9\nspecific_heat = 1000.0\n'
-                        'conductivity = 0.4', 1)
-    sim = simulate(text, tmp_path)
+    doc = collision(v=20.0, mu=0.5, end=6e-6, extra={
+        "heat": {"initial": 300.0}, "contact_conductance": {"h": h}, "friction_heating": {}})
+    _oblique_and_thermal(doc)
+    sim = simulate(doc, tmp_path)
     checked = 0
     while sim.t < sim.t_end and checked < 20:
         s = sim.store
@@ -369,18 +303,11 @@ h = {h!r}
                                   ("gravity", "damping", "bulk_viscosity", "contact", "heat",
                                    "cap_plasticity", "contact_friction")])
 def test_heat_effect_without_heat_table_is_an_error(tmp_path, name):
-    mat = """[materials.m]
-density = 1900.0
-bulk = 12.7e9
-shear = 4.4e9
-specific_heat = 1.0
-conductivity = 1.0
-expansion = 1e-5
-softening = 1e-3"""
-    body = {"contact_conductance": "h = 1.0"}.get(name, "")
-    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, extra=f"[{name}]\n{body}\n")
+    mat = plain_m(specific_heat=1.0, conductivity=1.0, expansion=1e-5, softening=1e-3)
+    body = {"contact_conductance": {"h": 1.0}}.get(name, {})
+    doc = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, extra={name: body})
     with pytest.raises(InputError, match=f"{name}: needs the \\[heat\\] table"):
-        parse_scene(text, str(tmp_path))
+        parse_scene(doc, str(tmp_path))
 
 
 @pytest.mark.parametrize("one,other", [("thermoelastic", "thermal_expansion"),
@@ -388,23 +315,22 @@ softening = 1e-3"""
 def test_thermoelastic_heating_and_thermal_expansion_come_together(tmp_path, one, other):
     """Either half of the thermo-elastic coupling alone creates energy: refused, naming the
     missing table."""
-    mat = PLAIN_M + "\nspecific_heat = 1000.0\nexpansion = 1e-5"
-    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7,
-                       extra=f"[heat]\ninitial = 300.0\n[{one}]\n")
+    mat = plain_m(specific_heat=1000.0, expansion=1e-5)
+    doc = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7,
+                       extra={"heat": {"initial": 300.0}, one: {}})
     with pytest.raises(InputError, match=f": {other}: is required by \\[{one}\\]"):
-        parse_scene(text, str(tmp_path))
+        parse_scene(doc, str(tmp_path))
 
 
 def test_missing_material_input_names_the_key(tmp_path):
-    mat = PLAIN_M
-    text = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, extra="[heat]\n")
+    doc = block_scene(plain_m(), (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7, extra={"heat": {}})
     with pytest.raises(InputError, match=r"materials\.m\.specific_heat: required by \[heat\]"):
-        parse_scene(text, str(tmp_path))
-    text = block_scene(mat + "\nspecific_heat = 1.0", (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7,
-                       extra="[heat]\n[conduction]\n")
+        parse_scene(doc, str(tmp_path))
+    doc = block_scene(plain_m(specific_heat=1.0), (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7,
+                       extra={"heat": {}, "conduction": {}})
     with pytest.raises(InputError, match=r"materials\.m\.conductivity: required by "
                                          r"\[conduction\]"):
-        parse_scene(text, str(tmp_path))
+        parse_scene(doc, str(tmp_path))
 
 
 def test_temperature_dependence_softens_the_elastic_increment():

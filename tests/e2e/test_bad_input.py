@@ -9,7 +9,6 @@ added, none changed: nothing overwritten without --force, nothing partial left b
 """
 
 import hashlib
-import json
 import os
 import shutil
 import subprocess
@@ -20,55 +19,59 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.scene.schema import OUTPUT_FIELDS
 from pdfem.scene.toml_out import dumps
-from tests.e2e.test_cli import datasets, pdfem
-from tests.scenes import drifting_grains, prep_scene, shock_scene, small_prepare
-
-# Two grains, a checkpoint every few steps
-GOOD = drifting_grains(n=2, end=1e-7).replace("interval = 2.5e-08",
-                                              "interval = 2.5e-08\ncheckpoint_interval = 5e-8")
-# A small shock scene with two inline grains between hammer and anvil
-SHOCK = shock_scene("none.h5", 1.0e-3, end=2e-7).replace(
-    '[grains_file]\npath = "none.h5"\nmaterial = "hmx"\n',
-    '[[grains]]\ncenter = [1.5e-4, 3.5e-4]\naxes = [1.0e-4, 1.0e-4]\nmaterial = "hmx"\n'
-    '[[grains]]\ncenter = [4.5e-4, 3.5e-4]\naxes = [1.0e-4, 1.0e-4]\nmaterial = "hmx"\n')
-# The shock scene with [heat] and every frame field the run file can hold
-EVERY_FIELD = SHOCK.replace("kappa0 = -1.0e9\n", "kappa0 = -1.0e9\nspecific_heat = 1444.0\n") \
-    .replace("kappa0 = -5.0e9\n", "kappa0 = -5.0e9\nspecific_heat = 450.0\n") \
-    .replace("interval = 5.0e-8\n", "interval = 5.0e-8\nfields = "
-             f"{json.dumps(list(OUTPUT_FIELDS))}\n") + "\n[heat]\n"
+from tests.helpers import datasets, pdfem
+from tests.scenes import (
+    checkpointed_grains,
+    drifting_grains,
+    every_field_shock,
+    inline_shock,
+    prep_scene,
+    small_prepare,
+    toml,
+    write_scene,
+)
 
 
-def _scene(**edits):
-    """GOOD with text replacements (old=new pairs given as keyword tuples)."""
-    text = GOOD
-    for old, new in edits.values():
-        assert old in text, old
-        text = text.replace(old, new)
-    return text
+def _good(edit):
+    """The TOML text of checkpointed_grains() changed by ``edit(doc)``."""
+    doc = checkpointed_grains()
+    edit(doc)
+    return toml(doc)
+
+
+def _grain_axes(doc, axes):
+    for g in doc["grains"]:
+        g["axes"] = axes
+
+
+def _prep(edit):
+    """The TOML text of prep_scene() changed by ``edit(doc)``."""
+    doc = prep_scene()
+    edit(doc)
+    return toml(doc)
 
 
 # Input files written once for all cases
 FILES = {
-    "good.toml": GOOD,
-    "other.toml": drifting_grains(n=4, end=1e-7),
+    "good.toml": toml(checkpointed_grains()),
+    "other.toml": toml(drifting_grains(n=4, end=1e-7)),
     "garbage.toml": "this is = = not [[[ toml\n",
-    "prep.toml": prep_scene(),
-    "typo.toml": prep_scene().replace("kappa0 = -1.0e9\n",
-                                      "kappa0 = -1.0e9\nspecfic_heat = 1.0\n"),
-    "fields.toml": EVERY_FIELD,
-    "shock.toml": SHOCK,
-    "negative.toml": _scene(a=("cell_size = 1.0e-3", "cell_size = -1.0e-3")),
-    "zero.toml": _scene(a=("axes = [4.0e-4, 3.0e-4]", "axes = [0.0, 3.0e-4]")),
-    "nan.toml": _scene(a=("end = 1e-07", "end = nan")),
-    "huge.toml": _scene(a=("box = [0.0, 0.0, 0.024, 0.006]", "box = [0.0, 0.0, 1.0e9, 0.006]")),
-    "effect.toml": GOOD + "\n[viscosityy]\ncoefficient = 1.0\n",
-    "fast.toml": GOOD + "\n[[blocks]]\nname = \"b\"\nbox = [0.0, 0.0, 0.024, 2.0e-4]\n"
-                        "material = \"grain\"\nvelocity = [0.0, 1.0e300]\n",
-    "prep-zero.toml": prep_scene().replace("grains = 8", "grains = 0"),
-    "one-cell.toml": _scene(a=("cell_size = 1.0e-3", "cell_size = 0.02")),
-    "steps.toml": _scene(a=("end = 1e-07", "end = 1000.0")),
+    "prep.toml": toml(prep_scene()),
+    "typo.toml": _prep(lambda d: d["materials"]["hmx"].update(specfic_heat=1.0)),
+    "fields.toml": toml(every_field_shock()),
+    "shock.toml": toml(inline_shock()),
+    "negative.toml": _good(lambda d: d["domain"].update(cell_size=-1.0e-3)),
+    "zero.toml": _good(lambda d: _grain_axes(d, [0.0, 3.0e-4])),
+    "nan.toml": _good(lambda d: d["time"].update(end=float("nan"))),
+    "huge.toml": _good(lambda d: d["domain"].update(box=[0.0, 0.0, 1.0e9, 0.006])),
+    "effect.toml": _good(lambda d: d.update(viscosityy={"coefficient": 1.0})),
+    "fast.toml": _good(lambda d: d.update(blocks=[{
+        "name": "b", "box": [0.0, 0.0, 0.024, 2.0e-4], "material": "grain",
+        "velocity": [0.0, 1.0e300]}])),
+    "prep-zero.toml": _prep(lambda d: d["prepare"].update(grains=0)),
+    "one-cell.toml": _good(lambda d: d["domain"].update(cell_size=0.02)),
+    "steps.toml": _good(lambda d: d["time"].update(end=1000.0)),
     "mat-text.toml": "[materials]\nhmx = \"text\"\n",
     "prep-vast.toml": dumps(small_prepare(semi_axis=[1.2e296, 1.6e296])),
     "prep-thin.toml": dumps(small_prepare(height=1.0e-9)),
@@ -417,9 +420,9 @@ def test_allow_huge_runs_what_is_refused_without_it(folder, tmp_path):
 def test_a_rank_without_grains_writes_its_share(tmp_path):
     """Two cells on two ranks, both grains in one: the rank with no bodies still takes part in
     the collective writes, and the file is the 1-rank one."""
-    text = drifting_grains(n=2, end=1e-7, frac=0.25).replace("cell_size = 1.0e-3",
-                                                             "cell_size = 0.012")
-    (tmp_path / "e.toml").write_text(text)
+    doc = drifting_grains(n=2, end=1e-7, frac=0.25)
+    doc["domain"]["cell_size"] = 0.012
+    write_scene(tmp_path / "e.toml", doc)
     for n in (1, 2):
         p = pdfem(["run", "e.toml", "-o", f"e{n}.h5", "--quiet"], tmp_path, ranks=n)
         assert p.returncode == 0, p.stderr
@@ -483,10 +486,10 @@ def test_many_coincident_grains_refused_with_the_first_pair(tmp_path):
     n = 20_000
     np.savez(tmp_path / "same.npz", x=np.full(n, 3e-3), y=np.full(n, 3e-3),
              a=np.full(n, 4e-4), b=np.full(n, 3e-4), angle=np.full(n, 0.2))
-    text = drifting_grains(n=1, end=1e-7, out="same.h5")
-    text = text[: text.index("[[grains]]")] + '[grains_file]\npath = "same.npz"\nmaterial = ' \
-        '"grain"\n'
-    (tmp_path / "same.toml").write_text(text)
+    doc = drifting_grains(n=1, end=1e-7, out="same.h5")
+    del doc["grains"]
+    doc["grains_file"] = {"path": "same.npz", "material": "grain"}
+    write_scene(tmp_path / "same.toml", doc)
     before = _state(tmp_path)
     p = pdfem(["run", "same.toml"], tmp_path, timeout=60)
     _one_error_line(p, "same.toml: grains_file: same.npz row 0 (grain 0): overlaps same.npz "

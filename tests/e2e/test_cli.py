@@ -1,45 +1,17 @@
 """The real command line: bit-identical run files on 1-4 ranks, bad scenes, output safety."""
 
-import os
-import subprocess
-import sys
-from pathlib import Path
-
 import h5py
 import numpy as np
 import pytest
 
-from tests.scenes import drifting_grains
-
-ROOT = Path(__file__).resolve().parents[2]
-MPIRUN = ["bash", str(ROOT / "jobs" / "mpirun.sh")]
-
-
-def pdfem(args, cwd, ranks=None, timeout=300, env=None):
-    """Run ``python -m pdfem`` (under mpirun when ranks is given; env: variables to set);
-    return the process."""
-    cmd = [sys.executable, "-m", "pdfem"] + list(args)
-    if ranks:
-        cmd = MPIRUN + ["-n", str(ranks)] + cmd
-    env = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
-    return subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout,
-                          env=env)
-
-
-def datasets(path):
-    """Every dataset of an HDF5 file as {name: array}."""
-    out = {}
-    with h5py.File(path) as f:
-        f.visititems(lambda n, o: out.__setitem__(n, o[()])
-                     if isinstance(o, h5py.Dataset) else None)
-    return out
+from tests.helpers import datasets, pdfem
+from tests.scenes import drifting_grains, settling_bed, toml, write_scene
 
 
 def test_bit_identical_on_1_2_3_4_ranks(tmp_path):
-    (tmp_path / "s.toml").write_text(drifting_grains(n=16, end=3e-6, extra="[gravity]\n"
-                                                     "g = [0.0, -9.81e6]\n[damping]\n"
-                                                     "gamma = 1.0e5\n[[gauges]]\n"
-                                                     "name = \"g\"\npoint = [0.0015, 0.0015]\n"))
+    write_scene(tmp_path / "s.toml", drifting_grains(n=16, end=3e-6, extra={
+        "gravity": {"g": [0.0, -9.81e6]}, "damping": {"gamma": 1.0e5},
+        "gauges": [{"name": "g", "point": [0.0015, 0.0015]}]}))
     ref = None
     for n in (1, 2, 3, 4):
         p = pdfem(["run", "s.toml", "-o", f"r{n}.h5", "--quiet"], tmp_path, ranks=n)
@@ -74,20 +46,15 @@ BAD = {
 }
 
 
-def _base():
-    text = drifting_grains(n=2, end=1e-7)
-    return text
-
-
 @pytest.mark.parametrize("case", sorted(BAD))
 def test_bad_scene_one_line_exit_2(tmp_path, case):
-    base = _base()
-    # Replace or add the faulty table
+    base = drifting_grains(n=2, end=1e-7)
+    # Remove the table a fault redefines, then append the fault (TOML text) to the file
     if BAD[case].startswith("[time]"):
-        base = base.replace("[time]\nend = 1e-07\nsafety = 0.5\n", "")
+        del base["time"]
     if BAD[case].startswith("[element]"):
-        base = base.replace('[element]\nrule = "1pt"\nlevel = 1\n', "")
-    (tmp_path / "bad.toml").write_text(base + "\n" + BAD[case])
+        del base["element"]
+    (tmp_path / "bad.toml").write_text(toml(base) + "\n" + BAD[case])
     p = pdfem(["run", "bad.toml", "--quiet"], tmp_path)
     assert p.returncode == 2, (case, p.stdout, p.stderr)
     lines = p.stderr.strip().splitlines()
@@ -99,7 +66,7 @@ def test_bad_scene_one_line_exit_2(tmp_path, case):
 def test_missing_scene_file_and_existing_output(tmp_path):
     p = pdfem(["run", "absent.toml"], tmp_path)
     assert p.returncode == 2 and "absent.toml" in p.stderr and "Traceback" not in p.stderr
-    (tmp_path / "s.toml").write_text(drifting_grains(n=2, end=1e-7, out="keep.h5"))
+    write_scene(tmp_path / "s.toml", drifting_grains(n=2, end=1e-7, out="keep.h5"))
     (tmp_path / "keep.h5").write_bytes(b"precious")
     p = pdfem(["run", "s.toml", "--quiet"], tmp_path)
     assert p.returncode == 2 and "--force" in p.stderr
@@ -110,14 +77,11 @@ def test_missing_scene_file_and_existing_output(tmp_path):
 
 
 def test_settling_bed_bit_identical_after_20000_steps(tmp_path):
-    from tests.scenes import settling_bed
-
-    text = settling_bed(n=200, end=1.0, partition="rcb").replace(
-        "safety = 0.5", "safety = 0.5\nmax_steps = 20000")
+    doc = settling_bed(n=200, end=1.0, partition="rcb")
+    doc["time"]["max_steps"] = 20000
     # Every contact of each frame too (/contacts/<frame>)
-    text = text.replace("interval = 0.25", 'interval = 5.0e-5\nfields = ["x", "v", "stress", '
-                        '"contacts"]')
-    (tmp_path / "bed.toml").write_text(text)
+    doc["output"].update(interval=5.0e-5, fields=["x", "v", "stress", "contacts"])
+    write_scene(tmp_path / "bed.toml", doc)
     ref = None
     for n in (1, 2, 3, 4):
         p = pdfem(["run", "bed.toml", "-o", f"b{n}.h5", "--quiet"], tmp_path, ranks=n,
@@ -136,14 +100,11 @@ def test_settling_bed_bit_identical_after_20000_steps(tmp_path):
 
 def test_heated_bed_bit_identical_on_1_2_3_ranks(tmp_path):
     """Contact heat (conductance, friction) into grains and the floor is rank-count free."""
-    from tests.scenes import settling_bed
-
-    heat = ("[heat]\ninitial = 300.0\n[conduction]\n[contact_conductance]\nh = 1.0e9\n"
-            "[friction_heating]\n[thermal_expansion]\n[thermoelastic]\n")
-    text = settling_bed(n=60, cols=10, end=8.0e-6, g=-1.0e7, partition="rcb", extra=heat)
-    text = text.replace("shear = 4.4e9", "shear = 4.4e9\nspecific_heat = 1000.0\n"
-                        "conductivity = 0.4\nexpansion = 5.0e-5", 1)
-    (tmp_path / "hot.toml").write_text(text)
+    heat = {"heat": {"initial": 300.0}, "conduction": {}, "contact_conductance": {"h": 1.0e9},
+            "friction_heating": {}, "thermal_expansion": {}, "thermoelastic": {}}
+    doc = settling_bed(n=60, cols=10, end=8.0e-6, g=-1.0e7, partition="rcb", extra=heat)
+    doc["materials"]["grain"].update(specific_heat=1000.0, conductivity=0.4, expansion=5.0e-5)
+    write_scene(tmp_path / "hot.toml", doc)
     ref = None
     for n in (1, 2, 3):
         p = pdfem(["run", "hot.toml", "-o", f"h{n}.h5", "--quiet"], tmp_path, ranks=n)

@@ -8,11 +8,8 @@ from mpi4py import MPI
 from pdfem.errors import SimulationError
 from pdfem.scene import parse_scene
 from pdfem.solver import Simulation
-from tests.e2e.test_cli import datasets, pdfem
-from tests.scenes import collision
-
-# A 200 m/s collision: energy error 0.34 % at time.safety 1.0, 0.15 % at 0.5, 0.07 % at 0.25
-FAST = collision(v=200.0, kn0=1e13, dmax=4e-5, end=4e-6).replace("safety = 0.5", "safety = 1.0")
+from tests.helpers import datasets, pdfem
+from tests.scenes import collision, fast_collision, write_scene
 
 
 def _same(p1, p2):
@@ -23,13 +20,17 @@ def _same(p1, p2):
         assert np.array_equal(a[k], b[k]), k
 
 
-def _scene(tmp_path, guards, name="s.toml", text=FAST):
-    (tmp_path / name).write_text(text + "\n[guards]\n" + guards)
+def _scene(tmp_path, guards, name="s.toml", doc=None):
+    """Write ``doc`` (fast_collision() when None) with the [guards] table ``guards`` (a dict);
+    return the name."""
+    doc = fast_collision() if doc is None else doc
+    doc["guards"] = guards
+    write_scene(tmp_path / name, doc)
     return name
 
 
 def test_energy_drift_stops_all_ranks_and_keeps_the_last_good_state(tmp_path):
-    name = _scene(tmp_path, "energy_drift = 0.003\nsnapshot_steps = 50\n")
+    name = _scene(tmp_path, {"energy_drift": 0.003, "snapshot_steps": 50})
     p = pdfem(["run", name, "-o", "r.h5", "--quiet"], tmp_path, ranks=2)
     assert p.returncode == 3, p.stderr
     line = [ln for ln in p.stderr.splitlines() if ln.startswith("pdfem: error")]
@@ -46,10 +47,10 @@ def test_energy_drift_stops_all_ranks_and_keeps_the_last_good_state(tmp_path):
         assert f.attrs["format"] >= 1
     # Restart from it with the guard relaxed: the run completes, and its file is the one a
     # run without the guard writes, bit for bit (the last good state is exact)
-    _scene(tmp_path, "energy_drift = 0.0\nsnapshot_steps = 50\n")
+    _scene(tmp_path, {"energy_drift": 0.0, "snapshot_steps": 50})
     p = pdfem(["run", name, "-o", "r.h5", "--quiet", "--restart", "r.h5.ckpt.h5"], tmp_path)
     assert p.returncode == 0, p.stderr
-    _scene(tmp_path, "energy_drift = 0.0\n", name="ref.toml")
+    _scene(tmp_path, {"energy_drift": 0.0}, name="ref.toml")
     p = pdfem(["run", "ref.toml", "-o", "ref.h5", "--quiet"], tmp_path)
     assert p.returncode == 0, p.stderr
     _same(tmp_path / "r.h5", tmp_path / "ref.h5")
@@ -64,9 +65,9 @@ def _stop_step(stderr):
 
 def test_energy_drift_is_checked_between_the_samples(tmp_path):
     # Energy samples every 0.5 us: the drift passes 0.3 % at about 0.9 us, between two
-    text = FAST.replace("energy_interval = 1e-07", "energy_interval = 5e-07")
-    assert text != FAST
-    _scene(tmp_path, "energy_drift = 0.003\n", text=text)
+    doc = fast_collision()
+    doc["output"]["energy_interval"] = 5e-07
+    _scene(tmp_path, {"energy_drift": 0.003}, doc=doc)
     steps = []
     for ranks in (1, 2):
         p = pdfem(["run", "s.toml", "-o", f"r{ranks}.h5", "--quiet"], tmp_path, ranks=ranks)
@@ -77,14 +78,14 @@ def test_energy_drift_is_checked_between_the_samples(tmp_path):
     # The fixed-point sums take the same decision at the same step on any rank count
     assert steps[0] == steps[1]
     # At the samples only, the same run goes on to the next sample and fails there
-    _scene(tmp_path, "energy_drift = 0.003\nenergy_steps = 0\n", text=text)
+    _scene(tmp_path, {"energy_drift": 0.003, "energy_steps": 0}, doc=doc)
     p = pdfem(["run", "s.toml", "-o", "r0.h5", "--quiet"], tmp_path)
     assert p.returncode == 3, p.stderr
     step, msg = _stop_step(p.stderr)
     assert step > steps[0] and float(msg.split("t=", 1)[1].split(" ", 1)[0]) >= 1e-6
     # Every 25 steps: a multiple of 25, no earlier than the every-step stop (the error
     # oscillates with the contact, so it may be back under the limit at the next multiple)
-    _scene(tmp_path, "energy_drift = 0.003\nenergy_steps = 25\n", text=text)
+    _scene(tmp_path, {"energy_drift": 0.003, "energy_steps": 25}, doc=doc)
     p = pdfem(["run", "s.toml", "-o", "r25.h5", "--quiet"], tmp_path)
     assert p.returncode == 3, p.stderr
     step = _stop_step(p.stderr)[0]
@@ -92,7 +93,8 @@ def test_energy_drift_is_checked_between_the_samples(tmp_path):
 
 
 def test_time_step_remedy_acts_logs_and_completes(tmp_path):
-    name = _scene(tmp_path, "energy_drift = 0.003\nsnapshot_steps = 50\ndt_retries = 3\n")
+    name = _scene(tmp_path, {"energy_drift": 0.003, "snapshot_steps": 50,
+                                   "dt_retries": 3})
     p = pdfem(["run", name, "-o", "r.h5"], tmp_path, ranks=2)
     assert p.returncode == 0, p.stderr
     acted = [ln for ln in p.stdout.splitlines() if ln.startswith("guard:")]
@@ -158,9 +160,9 @@ def test_non_finite_value_is_caught(tmp_path):
 
 def test_contact_stiffness_cap_logs_and_allows_the_element_step(tmp_path):
     stiff = collision(v=20.0, kn0=1e20, end=5e-7)
-    capped = stiff + "\n[guards]\ncap_contact = \"element\"\n"
-    (tmp_path / "a.toml").write_text(stiff)
-    (tmp_path / "b.toml").write_text(capped)
+    write_scene(tmp_path / "a.toml", stiff)
+    stiff["guards"] = {"cap_contact": "element"}
+    write_scene(tmp_path / "b.toml", stiff)
     pa = pdfem(["run", "a.toml", "-o", "a.h5"], tmp_path)
     pb = pdfem(["run", "b.toml", "-o", "b.h5"], tmp_path)
     assert pa.returncode == 0 and pb.returncode == 0, (pa.stderr, pb.stderr)

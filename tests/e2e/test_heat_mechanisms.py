@@ -6,7 +6,7 @@ import pytest
 
 from pdfem.io.contacts import COLUMNS
 from pdfem.scene.schema import HEAT_FIELDS
-from tests.e2e.test_cli import datasets, pdfem
+from tests.helpers import datasets, pdfem
 from tests.scenes import packaged, write_scene
 
 BETA, GAMMA, FRACTION = 0.9, 0.8, 0.7

@@ -11,9 +11,8 @@ import time
 import h5py
 import pytest
 
-from tests.e2e.test_cli import MPIRUN, ROOT, pdfem
-from tests.e2e.test_guards import FAST
-from tests.scenes import settling_bed
+from tests.helpers import MPIRUN, ROOT, pdfem
+from tests.scenes import fast_collision, settling_bed, write_scene
 
 # srun stand-in: the first call is stopped by SIGTERM after a second (the time limit)
 SRUN = """#!/usr/bin/env bash
@@ -31,10 +30,15 @@ echo "$@" >> sbatch.calls
 """
 
 
+def _bed(steps):
+    """A settling bed of 40 grains stopped after ``steps`` steps."""
+    doc = settling_bed(n=40, cols=10, end=1.0)
+    doc["time"]["max_steps"] = steps
+    return doc
+
+
 def test_slurm_script_chains_a_restart(tmp_path):
-    text = settling_bed(n=40, cols=10, end=1.0).replace("safety = 0.5",
-                                                        "safety = 0.5\nmax_steps = 20000")
-    (tmp_path / "s.toml").write_text(text)
+    write_scene(tmp_path / "s.toml", _bed(20000))
     stubs = tmp_path / "bin"
     stubs.mkdir()
     for name, body in (("srun", SRUN), ("sbatch", SBATCH), ("module", "#!/bin/sh\n")):
@@ -62,9 +66,7 @@ def test_pbs_script_chains_a_restart_when_the_walltime_signal_reaches_mpirun(tmp
     """PBS signals every process of the job at the walltime, mpirun included: the ranks
     checkpoint, the link ends with status 0 and queues the next, which finishes the run (real
     mpirun on 2 ranks through jobs/mpirun.sh, qsub stubbed)."""
-    text = settling_bed(n=40, cols=10, end=1.0).replace("safety = 0.5",
-                                                        "safety = 0.5\nmax_steps = 20000")
-    (tmp_path / "s.toml").write_text(text)
+    write_scene(tmp_path / "s.toml", _bed(20000))
     stubs = tmp_path / "bin"
     stubs.mkdir()
     for name, body in (("qsub", SBATCH.replace("sbatch", "qsub")), ("module", "#!/bin/sh\n")):
@@ -132,13 +134,11 @@ def _signal(p, whom, sig):
 STEPS = 16000
 
 
-def _launch(tmp_path, args, text=None, script=None):
+def _launch(tmp_path, args, doc=None, script=None):
     """``bash jobs/mpirun.sh -n 2 python -m pdfem <args>`` (or ``python <script> <args>``)
-    in a session of its own."""
-    if text is None:
-        text = settling_bed(n=40, cols=10, end=1.0).replace(
-            "safety = 0.5", f"safety = 0.5\nmax_steps = {STEPS}")
-    (tmp_path / "s.toml").write_text(text)
+    in a session of its own, on the scene ``doc`` (the settling bed of STEPS steps when None)
+    written as s.toml."""
+    write_scene(tmp_path / "s.toml", _bed(STEPS) if doc is None else doc)
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     command = [script] if script else ["-m", "pdfem"]
     return subprocess.Popen(MPIRUN + ["-n", "2", sys.executable] + command + args,
@@ -262,6 +262,7 @@ def test_failures_through_jobs_mpirun_keep_their_status(tmp_path):
     out, err = _ended(p)
     assert p.returncode == 2 and err.startswith("pdfem: error: "), err
     p = _launch(tmp_path, ["run", "s.toml", "-o", "g.h5", "--quiet"],
-                text=FAST + "\n[guards]\nenergy_drift = 0.003\nsnapshot_steps = 50\n")
+                doc=dict(fast_collision(),
+                         guards={"energy_drift": 0.003, "snapshot_steps": 50}))
     out, err = _ended(p)
     assert p.returncode == 3 and "check energy drift" in err, err

@@ -19,7 +19,7 @@ import pytest
 from pdfem.cli import main
 from pdfem.scene.toml_out import dumps
 from tests.e2e.test_bad_input import _state
-from tests.e2e.test_cli import ROOT
+from tests.helpers import ROOT
 from tests.scenes import packaged, prep_scene, small_prepare
 
 
@@ -38,9 +38,9 @@ SMALL = str(SCENES / "shot912_small.toml")
 FILES = {
     "wide.toml": _wide_bed(1.0, 0.1),
     "sweeps.toml": dumps(small_prepare("bed.h5", sweeps=10**12)),
-    "rain.toml": prep_scene(grains=20000),
-    "rain-long.toml": prep_scene().replace("phase_time = 2.0e-3", "phase_time = 1.0e3"),
-    "rain-1e9.toml": prep_scene(grains=10**9),
+    "rain.toml": dumps(prep_scene(grains=20000)),
+    "rain-long.toml": dumps(prep_scene(phase_time=1.0e3)),
+    "rain-1e9.toml": dumps(prep_scene(grains=10**9)),
     "geo-1e9.toml": _wide_bed(100.0, 100.0),
 }
 REFUSED = {

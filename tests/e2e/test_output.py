@@ -7,20 +7,19 @@ import meshio
 import numpy as np
 import pytest
 
-from tests.e2e.test_cli import pdfem
-from tests.scenes import settling_bed
+from tests.helpers import pdfem
+from tests.scenes import settling_bed, write_scene
 
 
 @pytest.fixture(scope="module")
 def run_file(tmp_path_factory):
     """A settling bed with contact forces in the frames, 2x2 elements, on 2 ranks."""
     d = tmp_path_factory.mktemp("out")
-    text = settling_bed(n=30, cols=10, end=1.0).replace("safety = 0.5",
-                                                        "safety = 0.5\nmax_steps = 8000")
-    text = text.replace('interval = 0.25', 'interval = 1.0e-5\nfields = ["x", "v", "stress", '
-                        '"contact_force"]')
-    text = text.replace("[element]", '[element]\nrule = "2x2"')
-    (d / "s.toml").write_text(text)
+    doc = settling_bed(n=30, cols=10, end=1.0)
+    doc["time"]["max_steps"] = 8000
+    doc["output"].update(interval=1.0e-5, fields=["x", "v", "stress", "contact_force"])
+    doc["element"]["rule"] = "2x2"
+    write_scene(d / "s.toml", doc)
     p = pdfem(["run", "s.toml", "-o", "r.h5", "--quiet"], d, ranks=2)
     assert p.returncode == 0, p.stderr
     return d / "r.h5"

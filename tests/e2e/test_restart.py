@@ -18,15 +18,24 @@ import numpy as np
 import pytest
 
 from pdfem.io.checkpoint import FORMAT, read_checkpoint
-from tests.e2e.test_cli import MPIRUN, ROOT, datasets, pdfem
-from tests.scenes import settling_bed
+from tests.helpers import MPIRUN, ROOT, datasets, pdfem
+from tests.scenes import settling_bed, write_scene
 
 
-def _bed(tmp_path, steps, extra=""):
-    text = settling_bed(n=60, cols=10, end=1.0, partition="rcb").replace(
-        "safety = 0.5", f"safety = 0.5\nmax_steps = {steps}")
-    text = text.replace("interval = 0.25", "interval = 2.0e-5" + extra)
-    (tmp_path / "bed.toml").write_text(text)
+def _bed_doc(steps, checkpoint=None):
+    """The settling bed of these tests: ``steps`` steps, a frame every 2e-5 s, a checkpoint
+    every ``checkpoint`` s when given."""
+    doc = settling_bed(n=60, cols=10, end=1.0, partition="rcb")
+    doc["time"]["max_steps"] = steps
+    doc["output"]["interval"] = 2.0e-5
+    if checkpoint is not None:
+        doc["output"]["checkpoint_interval"] = checkpoint
+    return doc
+
+
+def _bed(tmp_path, steps, checkpoint=None):
+    """Write _bed_doc as bed.toml in tmp_path; return its name."""
+    write_scene(tmp_path / "bed.toml", _bed_doc(steps, checkpoint))
     return "bed.toml"
 
 
@@ -48,7 +57,7 @@ def reference(tmp_path_factory):
 
 @pytest.mark.parametrize("ranks", [1, 3, 4])
 def test_restart_is_bit_identical(tmp_path, reference, ranks):
-    scene = _bed(tmp_path, 4000, "\ncheckpoint_interval = 1.5e-5")
+    scene = _bed(tmp_path, 4000, 1.5e-5)
     p = pdfem(["run", scene, "-o", "a.h5", "--quiet"], tmp_path, ranks=2)
     assert p.returncode == 0, p.stderr
     _same(reference, tmp_path / "a.h5")
@@ -83,7 +92,7 @@ def test_checkpoint_is_the_same_file_on_any_number_of_ranks(tmp_path):
     """Every rank writes its block of the global numbering: the checkpoint written on 1, 2
     and 3 ranks holds the same bytes in every dataset (bodies, nodes, elements, contact
     history by body, driver series)."""
-    scene = _bed(tmp_path, 1500, "\ncheckpoint_interval = 1.5e-5")
+    scene = _bed(tmp_path, 1500, 1.5e-5)
     files = []
     for ranks in (1, 2, 3):
         p = pdfem(["run", scene, "-o", f"r{ranks}.h5", "--quiet"], tmp_path, ranks=ranks)
@@ -182,7 +191,7 @@ def test_sigterm_ends_a_command_that_runs_no_simulation(tmp_path):
 
 def test_sigkill_of_a_run_checkpointing_every_step_keeps_a_readable_one(tmp_path, reference):
     # A checkpoint after every step: a kill lands in (or between) checkpoint writes
-    scene = _bed(tmp_path, 4000, "\ncheckpoint_interval = 1.0e-12")
+    scene = _bed(tmp_path, 4000, 1.0e-12)
     proc = _start(["run", scene, "-o", "k.h5", "--quiet"], tmp_path)
     _wait_for(tmp_path / "k.h5.ckpt.h5")
     time.sleep(1.5)
@@ -201,10 +210,11 @@ def test_sigkill_of_a_run_checkpointing_every_step_keeps_a_readable_one(tmp_path
 
 
 def test_restart_of_another_scene_is_refused(tmp_path, reference):
-    scene = _bed(tmp_path, 4000, "\ncheckpoint_interval = 2.0e-5")
+    scene = _bed(tmp_path, 4000, 2.0e-5)
     assert pdfem(["run", scene, "-o", "a.h5", "--quiet"], tmp_path).returncode == 0
-    text = (tmp_path / scene).read_text().replace("gamma = 20000.0", "gamma = 30000.0")
-    (tmp_path / "other.toml").write_text(text)
+    doc = _bed_doc(4000, 2.0e-5)
+    doc["damping"]["gamma"] = 30000.0
+    write_scene(tmp_path / "other.toml", doc)
     p = pdfem(["run", "other.toml", "--restart", "a.h5.ckpt.h5", "-o", "o.h5"], tmp_path)
     assert p.returncode == 2 and "different scene ([damping] differs" in p.stderr, p.stderr
 
@@ -274,7 +284,7 @@ def test_checkpoint_reader_names_a_bad_file(tmp_path):
 def test_a_damaged_checkpoint_is_refused_on_every_rank(tmp_path, damage):
     """A checkpoint whose rows do not fit together is refused with one line and status 2
     on 2 ranks, though only one rank's block may hold the damage (no rank hangs)."""
-    scene = _bed(tmp_path, 300, "\ncheckpoint_interval = 1.0e-6")
+    scene = _bed(tmp_path, 300, 1.0e-6)
     p = pdfem(["run", scene, "-o", "a.h5", "--quiet"], tmp_path)
     assert p.returncode == 0, p.stderr
     ck = tmp_path / "a.h5.ckpt.h5"
@@ -301,12 +311,12 @@ def test_rebalancing_moves_cells_and_keeps_results_bit_identical(tmp_path):
     # The bed falls onto the floor: the rcb cut made for the loose rows at t = 0 leaves the
     # ranks unequal once it has settled (6000 steps: the 4000 of the reference stay balanced
     # to within 5 % at every rebuild)
-    text = (tmp_path / _bed(tmp_path, 6000)).read_text()
-    (tmp_path / "ref.toml").write_text(text)
+    doc = _bed_doc(6000)
+    write_scene(tmp_path / "ref.toml", doc)
     p = pdfem(["run", "ref.toml", "-o", "ref.h5", "--quiet"], tmp_path)
     assert p.returncode == 0, p.stderr
-    (tmp_path / "rb.toml").write_text(
-        text.replace('partition = "rcb"', 'partition = "rcb"\nrebalance = 1.05'))
+    doc["domain"]["rebalance"] = 1.05
+    write_scene(tmp_path / "rb.toml", doc)
     p = pdfem(["run", "rb.toml", "-o", "rb.h5"], tmp_path, ranks=2)
     assert p.returncode == 0, p.stderr
     moved = [ln for ln in p.stdout.splitlines() if "rebalanced" in ln]
@@ -320,12 +330,10 @@ def test_point_gauge_keeps_its_element_across_a_restart_on_another_rank_count(tm
     /gauges dataset of the restarted run equals the uninterrupted run's."""
     from tests.scenes import drifting_grains
 
-    gauge = '\n[[gauges]]\nname = "p"\npoint = [0.002, 0.0015]\n'
-    out = "\ngauge_interval = 2.0e-7\ncheckpoint_interval = 3.0e-6"
-    scene = drifting_grains(end=4.0e-6, extra=gauge).replace(
-        "interval = 1e-06", "interval = 1e-06" + out)
-    assert "checkpoint_interval" in scene
-    (tmp_path / "g.toml").write_text(scene)
+    scene = drifting_grains(end=4.0e-6, extra={"gauges": [{"name": "p",
+                                                           "point": [0.002, 0.0015]}]})
+    scene["output"].update(gauge_interval=2.0e-7, checkpoint_interval=3.0e-6)
+    write_scene(tmp_path / "g.toml", scene)
     p = pdfem(["run", "g.toml", "-o", "ref.h5", "--quiet"], tmp_path)
     assert p.returncode == 0, p.stderr
     p = pdfem(["run", "g.toml", "--restart", "ref.h5.ckpt.h5", "-o", "b.h5", "--quiet"],
@@ -398,18 +406,18 @@ sys.argv[1:3] = []
 sys.exit(main(sys.argv[1:]))
 """
 
-# Frames every 5e-7 s (33 of them), checkpoints every 2e-6 s (at a frame: both schedules
-# take the first step at or past a multiple), a gauge and the contact forces
-KILL_OUT = ('interval = 5.0e-7\ngauge_interval = 2.5e-7\ncheckpoint_interval = 2.0e-6\n'
-            'fields = ["x", "v", "stress", "contact_force"]')
-KILL_GAUGE = '\n[[gauges]]\nname = "g"\npoint = [0.0008, 0.0003]\n'
-
-
 def _kill_scene(folder, checkpoints=True):
-    out = KILL_OUT if checkpoints else KILL_OUT.replace("\ncheckpoint_interval = 2.0e-6", "")
-    text = settling_bed(n=60, cols=10, end=1.0, partition="rcb").replace(
-        "safety = 0.5", "safety = 0.5\nmax_steps = 1500").replace("interval = 0.25", out)
-    (folder / "k.toml").write_text(text + KILL_GAUGE)
+    """Write the kill scene as k.toml in folder; return its name. Frames every 5e-7 s (33 of
+    them), checkpoints every 2e-6 s when asked (at a frame: both schedules take the first step
+    at or past a multiple), a gauge and the contact forces."""
+    doc = settling_bed(n=60, cols=10, end=1.0, partition="rcb",
+                       extra={"gauges": [{"name": "g", "point": [0.0008, 0.0003]}]})
+    doc["time"]["max_steps"] = 1500
+    doc["output"].update(interval=5.0e-7, gauge_interval=2.5e-7,
+                         fields=["x", "v", "stress", "contact_force"])
+    if checkpoints:
+        doc["output"]["checkpoint_interval"] = 2.0e-6
+    write_scene(folder / "k.toml", doc)
     return "k.toml"
 
 

@@ -7,8 +7,8 @@ import re
 
 import pytest
 
-from tests.e2e.test_cli import pdfem
-from tests.scenes import drifting_grains
+from tests.helpers import pdfem
+from tests.scenes import drifting_grains, write_scene
 
 COLUMNS = ["run", "axis", "level", "quads_per_grain", "rule", "safety", "kn0_scale", "wall_s",
            "steps", "us", "arrival", "hammer_stress", "packing", "err_us", "err_arrival",
@@ -90,7 +90,7 @@ BAD = {
 @pytest.mark.parametrize("case", sorted(BAD))
 def test_bad_study_input(tmp_path, case):
     extra, msg = BAD[case]
-    (tmp_path / "plain.toml").write_text(drifting_grains(n=2, end=1e-7))
+    write_scene(tmp_path / "plain.toml", drifting_grains(n=2, end=1e-7))
     args = ["study"] if extra is None else ["study", "accuracy"] + extra
     p = pdfem(args, tmp_path)
     assert p.returncode == 2, p.stderr

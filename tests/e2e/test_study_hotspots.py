@@ -10,7 +10,7 @@ import pytest
 
 from pdfem.scene.schema import HEAT_FIELDS
 from pdfem.study.hotspots import thermal_variant
-from tests.e2e.test_cli import pdfem
+from tests.helpers import pdfem
 from tests.scenes import drifting_grains, packaged, write_scene
 
 
@@ -90,7 +90,7 @@ BAD = {
 @pytest.mark.parametrize("case", sorted(BAD))
 def test_bad_hotspot_study_input(tmp_path, case):
     extra, msg = BAD[case]
-    (tmp_path / "plain.toml").write_text(drifting_grains(n=2, end=1e-7))
+    write_scene(tmp_path / "plain.toml", drifting_grains(n=2, end=1e-7))
     p = pdfem(["study", "hotspots"] + extra, tmp_path)
     assert p.returncode == 2, p.stderr
     assert msg in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr

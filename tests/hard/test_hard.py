@@ -8,7 +8,7 @@ import pytest
 
 from pdfem.study.hard import ENERGY_TOL
 from pdfem.study.hard_cases import CASES, LARGE_ONLY
-from tests.e2e.test_cli import pdfem
+from tests.helpers import pdfem
 
 CI_CASES = [c for c in CASES if c not in LARGE_ONLY]
 

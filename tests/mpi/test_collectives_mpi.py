@@ -50,12 +50,11 @@ def test_a_step_makes_one_reduction(tmp_path):
     """A settling bed with heat conduction, no blocks: a step that does not rebuild makes one
     collective, the time step's reduction, which also carries the rebuild flag and the
     conduction limit; a step that rebuilds adds the migration's exchanges."""
-    heat = "[heat]\ninitial = 300.0\n[conduction]\n"
-    text = settling_bed(n=60, cols=10, partition="strips", extra=heat)
-    text = text.replace("shear = 4.4e9", "shear = 4.4e9\nspecific_heat = 1000.0\n"
-                        "conductivity = 1.0e6", 1)
+    heat = {"heat": {"initial": 300.0}, "conduction": {}}
+    doc = settling_bed(n=60, cols=10, partition="strips", extra=heat)
+    doc["materials"]["grain"].update(specific_heat=1000.0, conductivity=1.0e6)
     comm = CountingComm(MPI.COMM_WORLD)
-    sim = Simulation(parse_scene(text, str(tmp_path)), comm)
+    sim = Simulation(parse_scene(doc, str(tmp_path)), comm)
     plain = rebuilds = 0
     for _ in range(1500):
         comm.calls.clear()

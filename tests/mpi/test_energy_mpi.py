@@ -31,9 +31,9 @@ def _quanta(sim):
 @pytest.mark.mpi(min_size=2)
 def test_fixed_point_terms_match_one_rank_bit_for_bit(tmp_path):
     comm = MPI.COMM_WORLD
-    text = settling_bed(n=60, cols=10, partition="strips")
-    par = Simulation(parse_scene(text, str(tmp_path)), comm)
-    ser = Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
+    doc = settling_bed(n=60, cols=10, partition="strips")
+    par = Simulation(parse_scene(doc, str(tmp_path)), comm)
+    ser = Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF)
     ref = comm.bcast(global_terms(par), root=0)
     n = par.layout.nbody
     for _ in range(4):

@@ -52,10 +52,10 @@ def test_ghosts_equal_owners(tmp_path):
 @pytest.mark.mpi(min_size=2)
 def test_migration_keeps_id_and_state(tmp_path):
     comm = MPI.COMM_WORLD
-    text = drifting_grains(n=6, speed=2000.0, end=8e-6, frac=0.3)
-    scene = parse_scene(text, str(tmp_path))
+    doc = drifting_grains(n=6, speed=2000.0, end=8e-6, frac=0.3)
+    scene = parse_scene(doc, str(tmp_path))
     par = Simulation(scene, comm)
-    ser = Simulation(parse_scene(text, str(tmp_path)), MPI.COMM_SELF)
+    ser = Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF)
     owners_seen = {}
     for _ in range(300):
         par.step()

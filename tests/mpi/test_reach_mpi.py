@@ -3,8 +3,6 @@
 Run under ``mpirun -n 2 python -m pytest --with-mpi tests/mpi``.
 """
 
-import tomllib
-
 import pytest
 from mpi4py import MPI
 
@@ -20,7 +18,7 @@ def test_a_grain_two_cells_away_is_a_ghost(tmp_path):
     (rank 0 owns cells 0-1, rank 1 cells 2-3): after the rebuild each rank that owns one
     holds the other as a ghost, and its contact candidates include the pair."""
     comm = MPI.COMM_WORLD
-    doc = tomllib.loads(collision(v=0.0))
+    doc = collision(v=0.0)
     doc["domain"]["partition"] = "strips"
     sim = Simulation(parse_scene(doc, str(tmp_path)), comm)
     s, g0 = sim.store, sim.nglobal

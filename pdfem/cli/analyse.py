@@ -28,7 +28,8 @@ def _plots(path):
         with h5py.File(path, "r") as f:
             plots = tomllib.loads(str(f.attrs["scene"]))["shock"].get("plots", "png")
             return plots, thermal_fields(f["frames"]) if "frames" in f else False
-    except (OSError, KeyError, TypeError, AttributeError, tomllib.TOMLDecodeError):
+    except (OSError, KeyError, TypeError, AttributeError, RuntimeError, ValueError,
+            tomllib.TOMLDecodeError):
         return None, False
 
 

@@ -17,7 +17,8 @@ import h5py
 import pytest
 
 from pdfem.cli import main
-from tests.e2e.test_bad_input import EVERY_FIELD, _state
+from tests.e2e.test_bad_input import _state
+from tests.scenes import every_field_shock, toml
 
 # Seconds a step of the metadata walk may take here (the files take milliseconds)
 LIMIT = 2
@@ -27,7 +28,7 @@ LIMIT = 2
 def shock(tmp_path_factory):
     """A shock run file with every frame field."""
     d = tmp_path_factory.mktemp("damaged")
-    (d / "s.toml").write_text(EVERY_FIELD)
+    (d / "s.toml").write_text(toml(every_field_shock()))
     status, err = _cli(["run", "s.toml", "-o", "shock.h5", "--quiet"], d)
     assert status == 0, err
     return d / "shock.h5"

@@ -78,12 +78,12 @@ def body_terms(sim):
     rows[:, TERMS.index("bc_work")] = s.acc[:nb, ACC_BC]
     rows[:, TERMS.index("friction")] = s.acc[:nb, ACC_FRIC]
     rows[:, TERMS.index("contact_damping")] = s.acc[:nb, ACC_CDAMP]
-    # Terms owned by effects (gravity potential, contact energy, ...)
-    extra = {}
+    # Terms owned by effects (gravity potential, contact energy, ...), each effect's added
     for eff in sim.effects:
+        extra = {}
         eff.energy_terms(sim, extra)
-    for name, vals in extra.items():
-        rows[:, TERMS.index(name)] += vals[:nb]
+        for name, vals in extra.items():
+            rows[:, TERMS.index(name)] += vals[:nb]
     # What the contacts absorbed beyond their stored energy and friction: the work done on
     # them (minus the work their forces did on the bodies) less those two
     ic, il = TERMS.index("contact"), TERMS.index("contact_loss")

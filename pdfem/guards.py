@@ -23,7 +23,6 @@ from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact_law import DT_FACTOR
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.parallel.mpi import global_min
-from pdfem.store import Store
 
 # What can help when a check fails, by the name its message starts with ("check NAME: ..."):
 # what a restart from the last good state may change, and what needs a new run
@@ -95,23 +94,8 @@ class Guards:
 
     def rollback(self, sim):
         """Put the last good state back into ``sim`` (collective); return its driver dict."""
-        snap = self.last
-        store = Store(sim.fields, snap.batch, snap.nb_own)
-        sim.owner = snap.owner.copy()
-        with sim.timers.phase("migration"):
-            sim.store, sim.halo = sim.rebuild(store)
-        sim.nstep, sim.t, sim.dt, sim.dt_prev = snap.nstep, snap.t, snap.dt, snap.dt_prev
-        s = sim.store
-        sim.du = np.zeros_like(s.v)
-        sim.f = np.zeros_like(s.v)
-        sim.fc = sim.contact_force_array()
-        sim.kin = np.zeros(s.nbody)
-        sim._fail_msg = ""
-        sim.stop_requested = False
-        for eff in sim.effects:
-            eff.after_rebuild(sim)
-        sim.refresh_reductions()
-        return dict(snap.driver)
+        sim.restore(self.last)
+        return dict(self.last.driver)
 
     def can_retry(self):
         """True when the time-step remedy has a retry left."""
@@ -122,9 +106,7 @@ class Guards:
         Returns the driver dict of that state and the line that says what was done."""
         driver = self.rollback(sim)
         self.retries_left -= 1
-        old = sim.safety
-        sim.safety *= 0.5
-        sim.dt *= 0.5
+        old = sim.halve_step()
         n = self.retries - self.retries_left
         line = (f"guard: {reason}; remedy {n} of {self.retries}: back to step {sim.nstep} "
                 f"(t={sim.t:.6e} s), time step halved (time.safety {old:g} -> {sim.safety:g})")

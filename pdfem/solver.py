@@ -110,9 +110,7 @@ class Simulation:
         # No step has a length before the first next_dt: set-up evaluates forces at dt = 0
         self.dt = self.dt_prev = 0.0
         self.du = np.zeros_like(self.store.v)
-        self.f = np.zeros_like(self.store.v)
-        self.kin = np.zeros(self.store.nbody)
-        self.fc = self.contact_force_array()
+        self._fresh_arrays()
         if restart is not None:
             # Continue exactly where the checkpoint stopped
             st = self.checkpoint.state
@@ -260,9 +258,7 @@ class Simulation:
                 self._rebalance()
                 self.store, self.halo = self.rebuild(s)
             s = self.store
-            self.f = np.zeros_like(s.v)
-            self.fc = self.contact_force_array()
-            self.kin = np.zeros(s.nbody)
+            self._fresh_arrays()
             for eff in self.effects:
                 eff.after_rebuild(self)
         else:
@@ -270,6 +266,49 @@ class Simulation:
                 self.halo.refresh([getattr(s, n) for n in self.halo_fields])
         # Step increments of ghosts are derived exactly as their owners computed them
         self.du = self.dt * s.v
+
+    def _fresh_arrays(self):
+        """The per-step arrays sized to the store, zeroed: the one place they are made (set-up,
+        a rebuild, a rollback): forces f, contact forces fc, kinetic energies kin."""
+        s = self.store
+        self.f = np.zeros_like(s.v)
+        self.fc = self.contact_force_array()
+        self.kin = np.zeros(s.nbody)
+
+    def restore(self, snap):
+        """Back to a last good state of the guards (:class:`pdfem.guards.Snapshot`)
+        (collective): its bodies rebuilt on its partition, its time and steps, the per-step
+        arrays fresh, the effects told, the reductions redone."""
+        self.owner = snap.owner.copy()
+        with self.timers.phase("migration"):
+            self.store, self.halo = self.rebuild(Store(self.fields, snap.batch, snap.nb_own))
+        self.nstep, self.t, self.dt, self.dt_prev = snap.nstep, snap.t, snap.dt, snap.dt_prev
+        self.du = np.zeros_like(self.store.v)
+        self._fresh_arrays()
+        self._fail_msg = ""
+        self.stop_requested = False
+        for eff in self.effects:
+            eff.after_rebuild(self)
+        self.refresh_reductions()
+
+    def halve_step(self):
+        """The time-step remedy: time step and time.safety halved; returns the old safety."""
+        old = self.safety
+        self.safety *= 0.5
+        self.dt *= 0.5
+        return old
+
+    def request_stop(self):
+        """Ask every rank to stop after this step (a signal; shared by the next reduction)."""
+        self.local_stop = 1.0
+
+    def request_checkpoint(self):
+        """Ask every rank to checkpoint after the next step (shared by its reduction)."""
+        self.local_ckpt = 1.0
+
+    def checkpoint_done(self):
+        """A checkpoint was written: the request is answered."""
+        self.checkpoint_requested = False
 
     def rebuild(self, store):
         """Migrate grains to their cells' owners and rebuild the ghosts of a ``store``, with

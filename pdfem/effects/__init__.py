@@ -21,6 +21,7 @@ from pdfem.effects.thermal import (
     ViscousHeating,
 )
 from pdfem.effects.viscosity import BulkViscosity
+from pdfem.scene import schema as S
 
 
 class CapPlasticity(Effect):
@@ -74,6 +75,17 @@ REGISTRY = {
     "contact_conductance": ContactConductance,
     "friction_heating": FrictionHeating,
 }
+
+
+def register(cls):
+    """Add an effect: its class to REGISTRY (after the built-in ones, so its hooks run after
+    theirs) and its table (``cls.section``, with the tables it needs, ``cls.requires``) to the
+    scene schema, where the scene check and the reference find it. Returns the class."""
+    REGISTRY[cls.name] = cls
+    if cls.section is not None and cls.section not in S.EFFECT_SECTIONS:
+        S.EFFECT_SECTIONS.append(cls.section)
+        S.EFFECT_REQUIRES[cls.section.name] = tuple(cls.requires)
+    return cls
 
 
 def is_present(name, resolved):

@@ -20,6 +20,10 @@ class Effect:
     name = ""
     extra_fields = ()  # store fields this effect adds (pdfem.store.Field)
     halo_fields = ()  # node fields refreshed on ghosts every step
+    # Its scene table (a pdfem.scene.keys.Section) and the tables it needs, for an effect
+    # added with pdfem.effects.register; the built-in effects' tables are in the schema
+    section = None
+    requires = ()
 
     def __init__(self, table, scene):
         self.table = table

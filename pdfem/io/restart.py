@@ -25,7 +25,7 @@ def catch_sigterm(sim):
     """Within the block, SIGTERM or SIGUSR1 asks ``sim`` to stop after the current step; one
     held since the process started (:mod:`pdfem.sigterm`) asks at once."""
     def handler(signum, frame):
-        sim.local_stop = 1.0
+        sim.request_stop()
 
     try:
         old = {sig: signal.signal(sig, handler) for sig in sigterm.STOP}
@@ -34,7 +34,7 @@ def catch_sigterm(sim):
         return
     # Read after the handler is in place, so that no signal falls between the two
     if sigterm.pending():
-        sim.local_stop = 1.0
+        sim.request_stop()
     try:
         yield
     finally:
@@ -59,7 +59,7 @@ class Checkpointer:
         sim = self.sim
         # Wall clock: rank 0 raises the flag that the next step's reduction shares
         if self.wall > 0 and sim.comm.rank == 0 and time.perf_counter() - self.last >= self.wall:
-            sim.local_ckpt = 1.0
+            sim.request_checkpoint()
         if at_end:
             return False
         want = sim.stop_requested or sim.checkpoint_requested
@@ -88,7 +88,7 @@ class Checkpointer:
                 arrays["gauge_sets"] = output.gauges.packed()
             state["arrays"] = arrays
         write_checkpoint(self.path, sim, state)
-        sim.checkpoint_requested = False
+        sim.checkpoint_done()
         self.last = time.perf_counter()
 
     def resume(self):

@@ -119,8 +119,9 @@ READING = {
 def _title(sec):
     """``[name]`` with its tags: (required), (effect)."""
     tags = [t for t, on in (("required", sec.required),
-                            ("effect", sec.name in S.PRESENCE_TABLES
-                             and sec.name not in ("walls", "grains_file")))
+                            ("effect", (sec.name in S.PRESENCE_TABLES
+                                        and sec.name not in ("walls", "grains_file"))
+                             or sec in S.EFFECT_SECTIONS))
             if on]
     suffix = f" ({', '.join(tags)})" if tags else ""
     return f"`{_heading(sec)}`{suffix}"
@@ -143,7 +144,7 @@ def _page(sec):
         lines += ['## `[contact.pairs."mat1:mat2"]`', "",
                   "Overrides for contacts between two materials (either order, each "
                   "pair once).", ""] + _rows(S.CONTACT_PAIR) + [""]
-    links = READING[sec.name]
+    links = READING.get(sec.name, [])
     if links:
         lines += ["Read more: " + ", ".join(f"[{t}]({u})" for t, u in links) + "."]
     return "\n".join(lines).rstrip("\n") + "\n"
@@ -156,7 +157,7 @@ def _index():
              "--out docs/scene`. Examples of whole scenes: [scenes by example]"
              "(../user/scenes.md).", "",
              "| table | what it is |", "|---|---|"]
-    for sec in S.SECTIONS:
+    for sec in S.all_sections():
         first = sec.doc.split(". ")[0].rstrip(".").replace("|", "\\|")
         lines.append(f"| [{_title(sec)}]({sec.name}.md) | {first}. |")
     return "\n".join(lines) + "\n"
@@ -165,7 +166,7 @@ def _index():
 def pages():
     """Every page of the reference: file name in docs/scene/ -> Markdown text."""
     out = {"README.md": _index()}
-    for sec in S.SECTIONS:
+    for sec in S.all_sections():
         out[f"{sec.name}.md"] = _page(sec)
     return out
 

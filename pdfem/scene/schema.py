@@ -439,6 +439,18 @@ SECTIONS = [
     Section("run", "table", "Run control.", RUN),
 ]
 
+# Tables of effects added with pdfem.effects.register (beyond the built-in ones above): plain
+# key tables, in the resolved scene only when given; EFFECT_REQUIRES names the tables each
+# needs
+EFFECT_SECTIONS = []
+EFFECT_REQUIRES = {}
+
+
+def all_sections():
+    """Every top-level table: the built-in ones, then those of registered effects."""
+    return SECTIONS + EFFECT_SECTIONS
+
+
 # Tables that appear in the resolved scene only when given (their presence is the effect)
 PRESENCE_TABLES = ("gravity", "damping", "bulk_viscosity", "grains_file", "walls", "contact",
                    "heat", "conduction", "dissipation_heating", "thermoelastic",

@@ -24,12 +24,15 @@ def resolve(doc, base_dir):
 
     Returns (resolved dict, grain arrays, material name -> id, grain label function).
     """
+    # The effects register their tables when imported (pdfem.effects.register)
+    import pdfem.effects  # noqa: F401
+
     doc = table(doc, "", "a TOML table")
-    known = [sec.name for sec in S.SECTIONS]
+    known = [sec.name for sec in S.all_sections()]
     for name in doc:
         if name not in known:
             raise SceneError(join("", name), f"unknown table (known: {', '.join(known)})")
-    secs = {sec.name: sec for sec in S.SECTIONS}
+    secs = {sec.name: sec for sec in S.all_sections()}
     for name, sec in secs.items():
         if sec.required and name not in doc:
             raise SceneError(name, f"required table [{name}] missing")
@@ -67,6 +70,13 @@ def resolve(doc, base_dir):
     for name in ("heat",) + S.HEAT_EFFECTS:
         if name in doc:
             r[name] = check_table(doc[name], secs[name].keys, name)
+    # The tables of registered effects: plain key tables, each with the tables it needs
+    for sec in S.EFFECT_SECTIONS:
+        if sec.name in doc:
+            r[sec.name] = check_table(doc[sec.name], sec.keys, sec.name)
+            for need in S.EFFECT_REQUIRES.get(sec.name, ()):
+                if need not in doc:
+                    raise SceneError(sec.name, f"needs the [{need}] table")
     if "thermal_bc" in doc:
         r["thermal_bc"] = [check_table(b, S.THERMAL_BC, f"thermal_bc[{i}]") for i, b in
                            enumerate(array_of_tables(doc["thermal_bc"], "thermal_bc"))]

@@ -23,7 +23,8 @@ from pdfem.energy import energy_floor, initial_strain_work
 from pdfem.errors import InputError, SimulationError
 from pdfem.guards import Guards, contact_stiffness_cap
 from pdfem.kernels.checks import first_nonfinite
-from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2
+from pdfem.kernels.element import q4_forces_2x2
+from pdfem.kernels.element_1pt import q4_forces_1pt
 from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, moves_half_skin
 from pdfem.kernels.material import material_initial_state

@@ -335,7 +335,7 @@ def test_missing_material_input_names_the_key(tmp_path):
 
 def test_temperature_dependence_softens_the_elastic_increment():
     """With softening s, a patch strained at T = T_ref + 100 gets K, G x (1 - 100 s)."""
-    from pdfem.kernels.element import q4_forces_1pt
+    from pdfem.kernels.element_1pt import q4_forces_1pt
     from pdfem.kernels.material import SOFT_FLOOR, softened
     from pdfem.kernels.params import BULK, MODEL, SHEAR, SOFT_K, T_REF
 

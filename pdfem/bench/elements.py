@@ -94,7 +94,7 @@ def c_yardstick(nx, ny, repeat):
 
     from pdfem.bench.cyardstick import load
     from pdfem.bench.numpy_element import bench_mesh
-    from pdfem.kernels.element import q4_forces_1pt
+    from pdfem.kernels.element_1pt import q4_forces_1pt
     from pdfem.kernels.params import BULK, ELASTIC, MODEL, NPAR, RHO, SHEAR
 
     cfn = load()

@@ -206,7 +206,8 @@ def bench_mesh(nx, ny, jitter=0.2, seed=0):
 
 def bench_elements(nx=200, ny=200, reps=5, rule="1pt"):
     """Seconds per call of the numba kernel and its numpy twin on a bench_mesh (dict)."""
-    from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2
+    from pdfem.kernels.element import q4_forces_2x2
+    from pdfem.kernels.element_1pt import q4_forces_1pt
     from pdfem.kernels.params import NPAR, RHO
 
     x, conn = bench_mesh(nx, ny)

@@ -10,16 +10,7 @@ skew at x_mid, so it rotates the stress and adds none.
 Node order is counter-clockwise; natural coordinates of nodes 1..4 are (-1,-1), (1,-1), (1,1),
 (-1,1). The 2x2 rule numbers its points in the same order at (+-1/sqrt3, +-1/sqrt3), weight 1.
 
-1-point rule: mean (= centroid) gradient b_I = dN_I/dx at the centre, b_x = (y24, y31, y42,
-y13)/(2A), b_y = (x42, x13, x24, x31)/(2A), plus Flanagan-Belytschko (1981) stiffness
-hourglass control with h = (1, -1, 1, -1):
-    gamma_I = (h_I - (h.x) b_xI - (h.y) b_yI) / 4        (gamma.h = 1, gamma . linear = 0)
-    dq_a    = sum_I gamma_I du_Ia                         (gamma at x_mid)
-    k       = hg_coef (K + 4G/3) (B.B) / A,  B_iI = int dN_I/dx_i dA = A b_iI
-    Q_a    <- Q_ab Q_b + k dq_a   (rotated with the element spin, then incremented; Q = hgq[e])
-    f_Ia   = Q_a gamma_I          (gamma at x; internal force, subtracted from f)
-The hourglass work 0.5 (Q_rotated + Q_new).dq joins ewint; its stored energy is 0.5 Q.Q / k.
-hgq of shape (0, 2) switches hourglass control off.
+The 1-point rule with hourglass control is pdfem.kernels.element_1pt.
 
 Force kernels return -1 on success, else the index of the first element whose area / IP
 Jacobian (mid-step or current) is not positive or whose material update failed; they stop
@@ -29,9 +20,8 @@ there, leaving that element partly updated (the run must then abort).
 import numpy as np
 from numba import njit
 
-from pdfem.kernels.element_fast import q4_forces_1pt_fast
 from pdfem.kernels.material import material_update, softened
-from pdfem.kernels.params import ALPHA, BULK, CAP, ELASTIC, MODEL, SHEAR, SOFT_K, SOFT_Y
+from pdfem.kernels.params import ALPHA, BULK, SHEAR, SOFT_K, SOFT_Y
 
 GP = 0.5773502691896257  # 1/sqrt(3), 2x2 Gauss abscissa
 XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
@@ -150,7 +140,7 @@ def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold):
 
 
 @njit(cache=True)
-def _thermal(p, eth, e, has_th, pbuf):
+def thermal_row(p, eth, e, has_th, pbuf):
     """Parameter row and thermal strain increment of element e.
 
     eth[e] = (mean temperature increment of the step, mean temperature, accumulated
@@ -165,18 +155,6 @@ def _thermal(p, eth, e, has_th, pbuf):
         softened(p, eth[e, 1], pbuf)
         return pbuf, dth
     return p, dth
-
-
-@njit(cache=True)
-def _hg_gamma(xe, bx, by, g):
-    """Flanagan-Belytschko hourglass vector g (4,) from coordinates and centroid gradients."""
-    hx = 0.0
-    hy = 0.0
-    for i in range(4):
-        hx += HG[i] * xe[i, 0]
-        hy += HG[i] * xe[i, 1]
-    for i in range(4):
-        g[i] = 0.25 * (HG[i] - hx * bx[i] - hy * by[i])
 
 
 @njit(cache=True)
@@ -198,110 +176,13 @@ def _scatter(conn, e, fe, f):
 
 
 @njit(cache=True)
-def _fast_models(mat_params):
-    """True when every material row is the elastic or the cap model (element_fast)."""
-    for m in range(mat_params.shape[0]):
-        model = int(mat_params[m, MODEL])
-        if model != ELASTIC and model != CAP:
-            return False
-    return True
-
-
-@njit(cache=True)
-def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
-                  f, ewint, ewp, eth):
-    """One-point quads with FB stiffness hourglass control on elements [e0, e1).
-
-    Updates sig (ne,1,4), mstate, hgq (ne,2) in place; subtracts internal forces from f
-    (nn,2) element by element; adds stress + hourglass work to ewint and plastic work to ewp.
-    eth (ne, 3) couples temperature in (see _thermal); shape (0, 3) leaves it out.
-    Returns -1, or the first element with non-positive area or a failed material update.
-    """
-    if sig.shape[1] != 1:
-        raise ValueError("q4_forces_1pt needs sig of shape (ne, 1, 4)")
-    # Elastic and cap materials, no heat: the scalar fast path (bit-identical)
-    if eth.shape[0] == 0 and _fast_models(mat_params):
-        return q4_forces_1pt_fast(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0,
-                                  e1, f, ewint, ewp)
-    # Scratch buffers, allocated once per call
-    xc = np.empty((4, 2))
-    xm = np.empty((4, 2))
-    ue = np.empty((4, 2))
-    fe = np.empty((4, 2))
-    bx = np.empty(4)
-    by = np.empty(4)
-    g = np.empty(4)
-    deps = np.empty(4)
-    sold = np.empty(4)
-    nost = np.zeros(0)
-    pbuf = np.empty(mat_params.shape[1])
-    has_state = mstate.shape[0] > 0
-    has_hg = hgq.shape[0] > 0
-    has_th = eth.shape[0] > 0
-    for e in range(e0, e1):
-        p, dth = _thermal(mat_params[emat[e]], eth, e, has_th, pbuf)
-        _gather(x, du, conn, e, xc, xm, ue)
-        # Strain and spin increment from the mid-step mean gradient
-        am = _bvec(xm, bx, by)
-        if am <= 0.0:
-            return e
-        gxx, gxy, gyx, gyy = _grad(ue, bx, by)
-        c, sn = _cayley(0.5 * (gxy - gyx))
-        s = sig[e, 0]
-        if has_state:
-            status, dwp, w, wth = _stress_point(p, s, mstate[e, 0], gxx, gxy, gyx, gyy, c, sn,
-                                                dth, deps, sold)
-        else:
-            status, dwp, w, wth = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn, dth,
-                                                deps, sold)
-        if status != 0:
-            return e
-        # Hourglass displacement increment at mid-step
-        dq0 = 0.0
-        dq1 = 0.0
-        if has_hg:
-            _hg_gamma(xm, bx, by, g)
-            for i in range(4):
-                dq0 += g[i] * ue[i, 0]
-                dq1 += g[i] * ue[i, 1]
-        # Current geometry: volume and gradients for the forces
-        a = _bvec(xc, bx, by)
-        if a <= 0.0:
-            return e
-        ewint[e] += w * a
-        ewp[e] += dwp * a
-        if has_th:
-            eth[e, 2] += wth * a
-        # Stress divergence forces f_I = A sig . b_I
-        for i in range(4):
-            fe[i, 0] = a * (s[0] * bx[i] + s[2] * by[i])
-            fe[i, 1] = a * (s[2] * bx[i] + s[1] * by[i])
-        # Rotate and increment the hourglass forces, add their work and nodal forces
-        if has_hg:
-            k = hg_coef * _hg_stiffness(p, a, bx, by)
-            q0 = c * hgq[e, 0] + sn * hgq[e, 1]
-            q1 = c * hgq[e, 1] - sn * hgq[e, 0]
-            n0 = q0 + k * dq0
-            n1 = q1 + k * dq1
-            hgq[e, 0] = n0
-            hgq[e, 1] = n1
-            ewint[e] += 0.5 * ((q0 + n0) * dq0 + (q1 + n1) * dq1)
-            _hg_gamma(xc, bx, by, g)
-            for i in range(4):
-                fe[i, 0] += n0 * g[i]
-                fe[i, 1] += n1 * g[i]
-        _scatter(conn, e, fe, f)
-    return -1
-
-
-@njit(cache=True)
 def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
                   f, ewint, ewp, eth):
     """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hgq and hg_coef are ignored.
 
     Updates sig (ne,4,4) and mstate per point; subtracts internal forces from f element by
     element; adds stress work to ewint and plastic work to ewp (weights x current det J).
-    eth (ne, 3) couples temperature in (see _thermal); shape (0, 3) leaves it out.
+    eth (ne, 3) couples temperature in (see thermal_row); shape (0, 3) leaves it out.
     Returns -1, or the first element with a non-positive IP Jacobian or a failed material.
     """
     if sig.shape[1] != 4:
@@ -320,7 +201,7 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
     has_state = mstate.shape[0] > 0
     has_th = eth.shape[0] > 0
     for e in range(e0, e1):
-        p, dth = _thermal(mat_params[emat[e]], eth, e, has_th, pbuf)
+        p, dth = thermal_row(mat_params[emat[e]], eth, e, has_th, pbuf)
         _gather(x, du, conn, e, xc, xm, ue)
         for i in range(4):
             fe[i, 0] = 0.0

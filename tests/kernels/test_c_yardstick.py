@@ -8,7 +8,8 @@ from pdfem.bench.cap_yardstick import HMX, cap_state
 from pdfem.bench.cyardstick import load
 from pdfem.bench.numpy_element import bench_mesh
 from pdfem.kernels.cap import CAP_NST
-from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2
+from pdfem.kernels.element import q4_forces_2x2
+from pdfem.kernels.element_1pt import q4_forces_1pt
 from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.params import BULK, CAP_T, ELASTIC, MODEL, NPAR, RHO, SHEAR
 from pdfem.material_point import cap_params_from_table

@@ -5,7 +5,8 @@ import pytest
 
 from pdfem.bench.numpy_element import numpy_forces_1pt, numpy_forces_2x2
 from pdfem.kernels.elastic import elastic_energy_density, elastic_update
-from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2
+from pdfem.kernels.element import q4_forces_2x2
+from pdfem.kernels.element_1pt import q4_forces_1pt
 from pdfem.kernels.element_measures import q4_lumped_mass, q4_strain_energy
 from pdfem.kernels.params import BULK, CAP, ELASTIC, MODEL, NPAR, RHO, SHEAR
 from pdfem.kernels.stable import q4_stable_dt
@@ -284,52 +285,54 @@ def test_jacobian_ratio():
     np.testing.assert_allclose(jacobian_ratio(x, conn), [1.0, 1.0, 1.0 / (1.0 + s)], rtol=1e-15)
 
 
-@pytest.mark.parametrize("hg", [True, False])
-def test_elastic_fast_path_is_bit_identical_to_the_general_kernel(hg):
-    # A second (unused) row of an unknown model sends q4_forces_1pt down its general path
-    x, conn = grid(12, 9, 0.2, 3)
-    ne = conn.shape[0]
-    rng = np.random.default_rng(8)
-    du = rng.uniform(-2e-3, 2e-3, size=x.shape)
-    sig0 = rng.uniform(-1e7, 1e7, (ne, 1, 4))
-    hg0 = rng.uniform(-10.0, 10.0, (ne, 2)) if hg else np.zeros((0, 2))
-    emat = np.zeros(ne, np.int32)
-    out = []
-    for mat in (material(), np.concatenate([material(), material(UNKNOWN_MODEL)])):
-        sig, hgq, f, ew = sig0.copy(), hg0.copy(), np.zeros_like(x), np.zeros(ne)
-        bad = q4_forces_1pt(x + du, du, conn, emat, mat, sig, np.zeros((ne, 1, 0)), hgq, HGC, 0,
-                            ne, f, ew, np.zeros(ne), np.zeros((0, 3)))
-        assert bad == -1
-        out.append((sig, hgq, f, ew))
-    for a, b in zip(*out, strict=True):
-        assert np.array_equal(a, b)
-
-
-def test_cap_fast_path_is_bit_identical_to_the_general_kernel_while_yielding():
-    # Cap and elastic elements squeezed call after call until most cap points yield; the
-    # general path (forced by an unused row of an unknown model) must match bit for bit
-    from pdfem.bench.cap_yardstick import hmx_params, squeeze
+def test_one_point_kernel_is_the_material_point_under_uniform_strain():
+    """A jittered mesh of cap and elastic elements in uniaxial strain, squeezed call after
+    call until the cap points yield: each element's stress and cap state are those of its
+    material point (material.material_update with the mid-step strain increment
+    e / (1 + e/2)), to rounding; the kernel's inline cap trial and return are cap_update's."""
+    from pdfem.bench.cap_yardstick import hmx_params
     from pdfem.kernels.cap import CAP_NST
-    from pdfem.kernels.material import material_initial_state
+    from pdfem.kernels.material import material_initial_state, material_update
 
-    x0, conn = grid(16, 12, 0.2, 5)
+    x, conn = grid(16, 12, 0.2, 5)
+    x = x * 1e-4
     ne = conn.shape[0]
     emat = (np.arange(ne) % 5 == 0).astype(np.int32)  # every fifth element elastic
-    fast = np.concatenate([hmx_params(), material()])
-    general = np.concatenate([fast, material(UNKNOWN_MODEL)])
-    dstep = squeeze(x0 * 1e-4, 2.0e-3, 4.0e-3)
-    state = {}
-    for name, mat in (("fast", fast), ("general", general)):
-        x = x0 * 1e-4
-        sig, mst = np.zeros((ne, 1, 4)), np.zeros((ne, 1, CAP_NST))
-        material_initial_state(mst, emat, mat)
-        hgq, ew, ewp = np.zeros((ne, 2)), np.zeros(ne), np.zeros(ne)
-        for _ in range(12):
-            x = x + dstep
-            f = np.zeros_like(x)
-            assert q4_forces_1pt(x, dstep, conn, emat, mat, sig, mst, hgq, HGC, 0, ne, f, ew,
-                                 ewp, np.zeros((0, 3))) == -1
-        state[name] = (sig, mst, hgq, f, ew, ewp)
-    assert (state["fast"][5] > 0).mean() > 0.3  # many points did plastic work
-    for a, b in zip(state["fast"], state["general"], strict=True):
-        assert np.array_equal(a, b)
+    mat = np.concatenate([hmx_params(), material()])
+    sig, mst = np.zeros((ne, 1, 4)), np.zeros((ne, 1, CAP_NST))
+    material_initial_state(mst, emat, mat)
+    hgq, ew, ewp = np.zeros((ne, 2)), np.zeros(ne), np.zeros(ne)
+    # The two material points, one per row
+    point = [(np.zeros(4), mst[np.nonzero(emat == m)[0][0], 0].copy()) for m in (0, 1)]
+    ey = -4.0e-3
+    for _ in range(12):
+        du = np.stack([np.zeros(x.shape[0]), ey * x[:, 1]], axis=1)
+        x = x + du
+        f = np.zeros_like(x)
+        assert q4_forces_1pt(x, du, conn, emat, mat, sig, mst, hgq, HGC, 0, ne, f, ew, ewp,
+                             np.zeros((0, 3))) == -1
+        deps = np.array([0.0, ey / (1.0 + 0.5 * ey), 0.0, 0.0])
+        for m, (s, st) in enumerate(point):
+            status, _ = material_update(mat[m], s, deps, st)
+            assert status == 0
+    assert (ewp > 0).mean() > 0.5  # the cap points yielded
+    for m, (s, st) in enumerate(point):
+        rows = np.nonzero(emat == m)[0]
+        scale = np.abs(s).max()
+        np.testing.assert_allclose(sig[rows, 0], np.broadcast_to(s, (rows.size, 4)),
+                                   rtol=1e-9, atol=1e-12 * scale)
+        np.testing.assert_allclose(mst[rows, 0], np.broadcast_to(st, (rows.size, st.size)),
+                                   rtol=1e-9, atol=1e-12 * max(np.abs(st).max(), 1.0))
+
+
+def test_an_unknown_material_model_stops_the_one_point_kernel():
+    x, conn = grid(4, 3, 0.2, 3)
+    ne = conn.shape[0]
+    emat = np.zeros(ne, np.int32)
+    emat[5] = 1
+    mat = np.concatenate([material(), material(UNKNOWN_MODEL)])
+    du = np.full_like(x, 1e-4)
+    bad = q4_forces_1pt(x + du, du, conn, emat, mat, np.zeros((ne, 1, 4)), np.zeros((ne, 1, 0)),
+                        np.zeros((ne, 2)), HGC, 0, ne, np.zeros_like(x), np.zeros(ne),
+                        np.zeros(ne), np.zeros((0, 3)))
+    assert bad == 5

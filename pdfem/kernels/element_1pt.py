@@ -1,23 +1,36 @@
-"""The 1-point quad with hourglass control, fast path: elastic and cap materials, no heat.
+"""The 1-point quad with hourglass control (plane strain, thickness 1 m): stress and forces.
 
-The same algorithm as ``pdfem.kernels.element.q4_forces_1pt`` (see that module for the
-equations), operation for operation, specialised to the elastic and Sandler-Rubin cap models
-without thermal coupling: every quantity of an element lives in scalar locals (no scratch
-arrays, no material dispatch through arrays), which lets LLVM keep them in registers. A cap
-point first takes the elastic trial and its yield value exactly as ``cap.cap_update`` does and
-only calls the plastic return when the trial is outside. The general kernel calls this one
-when every row of the material table is elastic or cap and heat is off; the two give
-bit-identical results (tests/kernels/test_element.py). Sign convention: tension positive.
+The objective update of pdfem.kernels.element (mid-step gradient, Cayley rotation, material
+update, forces at the current configuration) at the element centre, with the mean (=
+centroid) gradient b_I = dN_I/dx, b_x = (y24, y31, y42, y13)/(2A), b_y = (x42, x13, x24,
+x31)/(2A), plus Flanagan-Belytschko (1981) stiffness hourglass control, h = (1, -1, 1, -1):
+    gamma_I = (h_I - (h.x) b_xI - (h.y) b_yI) / 4        (gamma.h = 1, gamma . linear = 0)
+    dq_a    = sum_I gamma_I du_Ia                         (gamma at x_mid)
+    k       = hg_coef (K + 4G/3) (B.B) / A,  B_iI = int dN_I/dx_i dA = A b_iI
+    Q_a    <- Q_ab Q_b + k dq_a   (rotated with the element spin, then incremented; Q = hgq[e])
+    f_Ia   = Q_a gamma_I          (gamma at x; internal force, subtracted from f)
+The hourglass work 0.5 (Q_rotated + Q_new).dq joins ewint; its stored energy is 0.5 Q.Q / k.
+hgq of shape (0, 2) switches hourglass control off.
+
+One kernel for every material and thermal coupling: every quantity of an element lives in
+scalar locals (no scratch arrays), which lets LLVM keep them in registers. A cap point takes
+the elastic trial and its yield value exactly as ``cap.cap_update`` computes them and calls
+the plastic return only when the trial is outside; an elastic point takes the elastic
+increment. With thermal coupling (eth of shape (ne, 3)) the material row may be softened
+with the element temperature and the thermal strain is taken out of the material's strain
+(pdfem.kernels.element.thermal_row). Sign convention: tension positive.
 """
 
 import math
 
+import numpy as np
 from numba import njit
 
 from pdfem.kernels.cap import _plastic_update
 from pdfem.kernels.cap_surface import yield_value
 from pdfem.kernels.elastic import elastic_increment
-from pdfem.kernels.params import BULK, CAP, MODEL, SHEAR
+from pdfem.kernels.element import thermal_row
+from pdfem.kernels.params import BULK, CAP, ELASTIC, MODEL, SHEAR
 
 
 @njit(cache=True)
@@ -42,18 +55,24 @@ def _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1, by2, by
 
 
 @njit(cache=True)
-def q4_forces_1pt_fast(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1, f,
-                       ewint, ewp):
-    """q4_forces_1pt for elastic and cap materials without heat on elements [e0, e1).
+def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1, f, ewint,
+                  ewp, eth):
+    """One-point quads with FB stiffness hourglass control on elements [e0, e1).
 
-    Updates sig (ne,1,4), mst (ne,1,nst) and hgq (ne,2) (shape (0, 2): no hourglass control)
-    in place, subtracts the internal forces from f, adds stress and hourglass work to ewint
-    and plastic work to ewp. Returns -1, or the first element with a non-positive (mid-step
-    or current) area, a non-finite cap input or a failed cap return.
+    Updates sig (ne,1,4), mst (ne,1,nst) and hgq (ne,2) in place, subtracts the internal
+    forces from f (nn,2) element by element, adds stress and hourglass work to ewint and
+    plastic work to ewp. eth (ne, 3) couples temperature in (element.thermal_row; the
+    thermal-strain work goes to eth[:, 2]); shape (0, 3) leaves it out. Returns -1, or the
+    first element with a non-positive (mid-step or current) area, a non-finite cap input, a
+    failed cap return or an unknown material model.
     """
+    if sig.shape[1] != 1:
+        raise ValueError("q4_forces_1pt needs sig of shape (ne, 1, 4)")
     has_hg = hgq.shape[0] > 0
+    has_th = eth.shape[0] > 0
+    pbuf = np.empty(mat_params.shape[1])
     for e in range(e0, e1):
-        p = mat_params[emat[e]]
+        p, dth = thermal_row(mat_params[emat[e]], eth, e, has_th, pbuf)
         # Current coordinates, increments and mid-step coordinates of the 4 nodes
         n0 = conn[e, 0]
         n1 = conn[e, 1]
@@ -87,9 +106,10 @@ def q4_forces_1pt_fast(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0
         r1 = sn * sn * sxx - 2.0 * c * sn * sxy + c * c * syy
         r2 = c * sn * (syy - sxx) + (c * c - sn * sn) * sxy
         r3 = s[3]
-        d0, d1, d2, d3 = gxx - 0.0, gyy - 0.0, 0.5 * (gxy + gyx), -0.0
+        d0, d1, d2, d3 = gxx - dth, gyy - dth, 0.5 * (gxy + gyx), -dth
         dwp = 0.0
-        if int(p[MODEL]) == CAP:
+        model = int(p[MODEL])
+        if model == CAP:
             # Cap: the elastic trial and its yield value as cap.cap_update computes them
             st = mst[e, 0]
             if not (math.isfinite(d0 + d1 + d2 + d3)
@@ -113,12 +133,14 @@ def q4_forces_1pt_fast(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0
                 if status != 0:
                     return e
                 t0, t1, t2, t3 = s[0], s[1], s[2], s[3]
-        else:
-            # Elastic
+        elif model == ELASTIC:
             i0, i1, i2, i3 = elastic_increment(p, d0, d1, d2, d3)
             t0, t1, t2, t3 = r0 + i0, r1 + i1, r2 + i2, r3 + i3
             s[0], s[1], s[2], s[3] = t0, t1, t2, t3
+        else:
+            return e
         wk = 0.5 * ((r0 + t0) * d0 + (r1 + t1) * d1 + 2.0 * (r2 + t2) * d2 + (r3 + t3) * d3)
+        wth = 0.5 * dth * (r0 + t0 + r1 + t1 + r3 + t3)
         # Hourglass displacement increment at mid-step
         dq0 = 0.0
         dq1 = 0.0
@@ -134,6 +156,8 @@ def q4_forces_1pt_fast(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0
             return e
         ewint[e] += wk * a
         ewp[e] += dwp * a
+        if has_th:
+            eth[e, 2] += wth * a
         # Stress divergence forces f_I = A sig . b_I
         fx0, fy0 = a * (t0 * bx0 + t2 * by0), a * (t2 * bx0 + t1 * by0)
         fx1, fy1 = a * (t0 * bx1 + t2 * by1), a * (t2 * bx1 + t1 * by1)

@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 
-from pdfem.bench.numpy_element import numpy_forces_1pt, numpy_forces_2x2
 from pdfem.kernels.elastic import elastic_energy_density, elastic_update
 from pdfem.kernels.element import q4_forces_1pt, q4_forces_2x2
 from pdfem.kernels.element_measures import q4_lumped_mass, q4_strain_energy
 from pdfem.kernels.params import BULK, CAP, ELASTIC, MODEL, NPAR, RHO, SHEAR
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.mesh.quality import jacobian_ratio
+from pdfem.tools.bench.numpy_element import numpy_forces_1pt, numpy_forces_2x2
 
 K = 1.0e10
 G = 6.0e9
@@ -308,9 +308,9 @@ def test_elastic_fast_path_is_bit_identical_to_the_general_kernel(hg):
 def test_cap_fast_path_is_bit_identical_to_the_general_kernel_while_yielding():
     # Cap and elastic elements squeezed call after call until most cap points yield; the
     # general path (forced by an unused row of an unknown model) must match bit for bit
-    from pdfem.bench.cap_yardstick import hmx_params, squeeze
     from pdfem.kernels.cap import CAP_NST
     from pdfem.kernels.material import material_initial_state
+    from pdfem.tools.bench.cap_yardstick import hmx_params, squeeze
 
     x0, conn = grid(16, 12, 0.2, 5)
     ne = conn.shape[0]

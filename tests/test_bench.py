@@ -145,7 +145,7 @@ def test_bench_peers_prints_the_ratio_to_the_lammps_bed(tmp_path):
 
 
 def test_lammps_bed_without_lmp_says_how_to_get_it(monkeypatch):
-    from pdfem.bench import peers
+    from pdfem.tools.bench import peers
 
     monkeypatch.setattr(peers.shutil, "which", lambda name: None)
     lines = []

@@ -2,7 +2,7 @@
 
 import pytest
 
-from pdfem.study.convergence import observed_orders
+from pdfem.tools.study.convergence import observed_orders
 
 
 @pytest.mark.parametrize("rule", ["1pt", "2x2"])

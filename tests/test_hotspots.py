@@ -6,12 +6,12 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.analysis.hotcensus import census
-from pdfem.analysis.hotfront import FrontRelative, arrival_times, front_history
-from pdfem.analysis.hotgeom import components, segment_distance
-from pdfem.analysis.hotspots import weighted_percentiles
-from pdfem.analysis.runfile import read_run
 from pdfem.cli import main
+from pdfem.tools.analysis.hotcensus import census
+from pdfem.tools.analysis.hotfront import FrontRelative, arrival_times, front_history
+from pdfem.tools.analysis.hotgeom import components, segment_distance
+from pdfem.tools.analysis.hotspots import weighted_percentiles
+from pdfem.tools.analysis.runfile import read_run
 from tests import test_shock_analysis as sa
 
 A = 1.0e-4          # element side

@@ -5,12 +5,12 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.analysis.runfile import element_areas
 from pdfem.errors import InputError
 from pdfem.io.bedfile import read_bed, write_bed
 from pdfem.mesh.ellipse import _kite_numbering, ellipse_mesh, place
 from pdfem.prepare.relevel import refine_nodes, refine_points, relevel_bed
 from pdfem.scene.values import SceneError
+from pdfem.tools.analysis.runfile import element_areas
 
 
 def _deformed_grains(n=5, seed=3):

@@ -1,4 +1,4 @@
-"""Shock analysis (pdfem.analysis) on synthetic data with a known answer."""
+"""Shock analysis (pdfem.tools.analysis) on synthetic data with a known answer."""
 
 import json
 
@@ -6,10 +6,10 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.analysis import analyse
-from pdfem.analysis import front as fr
-from pdfem.analysis.plots import sweep_plot
 from pdfem.errors import InputError
+from pdfem.tools.analysis import analyse
+from pdfem.tools.analysis import front as fr
+from pdfem.tools.analysis.plots import sweep_plot
 
 # Steady snowplow-like wave: bed density, density behind the front, particle velocity
 RHO_S, RHO0, RHO1, UP = 1900.0, 1240.0, 1800.0, 288.0
@@ -192,7 +192,7 @@ def test_front_fit_tells_unsteady_and_stalled_fronts():
 def test_compaction_and_momentum_share():
     """Compaction from the centre of mass and from the bed height, kept share; the momentum
     of the grains ahead of the front; the drive's deviation; the piston's stress."""
-    from pdfem.analysis import compaction as cp
+    from pdfem.tools.analysis import compaction as cp
 
     t = np.linspace(0.0, 1.0, 11)
     # Two grains of mass 1 and 3 at heights 1 and 3 over an anvil at 0: compress to half,

@@ -2,8 +2,8 @@
 
 import math
 
-from pdfem.study import accuracy as acc
-from pdfem.study.pareto import add_errors, mark_pareto, recommend, recommendation_line
+from pdfem.tools.study import accuracy as acc
+from pdfem.tools.study.pareto import add_errors, mark_pareto, recommend, recommendation_line
 
 KEYS = ("us", "arrival", "hammer_stress", "packing")
 

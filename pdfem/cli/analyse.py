@@ -16,13 +16,13 @@ def add_parser(sub):
 
 def _plots(path):
     """([shock].plots of a run file's scene, whether its frames hold temperatures), or
-    (None, False) when the file does not tell (then :func:`pdfem.analysis.analyse` reports
+    (None, False) when the file does not tell (then :func:`pdfem.tools.analysis.analyse` reports
     what is wrong with it)."""
     import tomllib
 
     import h5py
 
-    from pdfem.analysis.summary import thermal_fields
+    from pdfem.tools.analysis.summary import thermal_fields
 
     try:
         with h5py.File(path, "r") as f:
@@ -34,11 +34,11 @@ def _plots(path):
 
 
 def run(args):
-    from pdfem.analysis import analyse
-    from pdfem.analysis.summary import output_files, report_text
     from pdfem.cli.paths import check_output_path, prefix_of
     from pdfem.errors import InputError
     from pdfem.io.probe import check_metadata
+    from pdfem.tools.analysis import analyse
+    from pdfem.tools.analysis.summary import output_files, report_text
 
     if not args.runfile:
         raise InputError("runfile: empty file name")

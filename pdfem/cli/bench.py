@@ -2,17 +2,17 @@
 figures.
 
 elements: element updates per second of both integration rules, numba kernels vs their
-numpy twins and the 1-point kernel vs its C yardstick (pdfem.bench.elements); with
+numpy twins and the 1-point kernel vs its C yardstick (pdfem.tools.bench.elements); with
 --material cap and/or --heat, the cost per element-step of those effects in real solver steps
-(pdfem.bench.effects). contact: whole steps of dense grain beds of several sizes, contact and
-element time, memory per grain, the contact pass against its C twin (pdfem.bench.contact).
-peers: the 10^4-grain cap bed against a LAMMPS bed of 10^4 frictional discs, when lmp is on
-the PATH (pdfem.bench.peers). parallel: halo and migration cost,
-under mpirun (pdfem.bench.parallel). checkpoint: the time of a checkpoint's write and of a
-restart's set-up, and rank 0's memory during both, on any number of ranks
-(pdfem.bench.checkpoint). startup: seconds to the first step of a fresh process
-(pdfem.bench.startup). all: every figure with its target (pdfem.bench.suite). Figures are
-printed, never asserted; all but parallel and checkpoint run on one rank.
+(pdfem.tools.bench.effects). contact: whole steps of dense grain beds of several sizes,
+contact and element time, memory per grain, the contact pass against its C twin
+(pdfem.tools.bench.contact). peers: the 10^4-grain cap bed against a LAMMPS bed of 10^4
+frictional discs, when lmp is on the PATH (pdfem.tools.bench.peers). parallel: halo and
+migration cost, under mpirun (pdfem.tools.bench.parallel). checkpoint: the time of a
+checkpoint's write and of a restart's set-up, and rank 0's memory during both, on any number
+of ranks (pdfem.tools.bench.checkpoint). startup: seconds to the first step of a fresh process
+(pdfem.tools.bench.startup). all: every figure with its target (pdfem.tools.bench.suite).
+Figures are printed, never asserted; all but parallel and checkpoint run on one rank.
 """
 
 import json
@@ -103,7 +103,7 @@ def run(args):
     from pdfem.parallel.mpi import world
 
     if args.what == "parallel":
-        from pdfem.bench.parallel import print_parallel
+        from pdfem.tools.bench.parallel import print_parallel
 
         if world().size < 2:
             raise InputError("bench parallel: start it under mpirun with 2 or more ranks")
@@ -114,7 +114,7 @@ def run(args):
             os.replace(args.json + ".part", args.json)
         return 0
     if args.what == "checkpoint":
-        from pdfem.bench.checkpoint import print_checkpoint
+        from pdfem.tools.bench.checkpoint import print_checkpoint
 
         print_checkpoint(grains, repeat, log=_log)
         return 0
@@ -123,27 +123,27 @@ def run(args):
                          "without mpirun")
     # The chosen benchmark, printing its own table
     if args.what == "all":
-        from pdfem.bench.suite import run_all
+        from pdfem.tools.bench.suite import run_all
 
         run_all(repeat, n, sizes, per_rank, log=_log, cold=not args.warm_only)
     elif args.what == "elements" and (args.material != "elastic" or args.heat):
-        from pdfem.bench.effects import print_effects
+        from pdfem.tools.bench.effects import print_effects
 
         print_effects(n, repeat, args.material, args.heat, log=_log)
     elif args.what == "elements":
-        from pdfem.bench.elements import print_elements
+        from pdfem.tools.bench.elements import print_elements
 
         print_elements(n, repeat, log=_log)
     elif args.what == "contact":
-        from pdfem.bench.contact import print_contact
+        from pdfem.tools.bench.contact import print_contact
 
         print_contact(sizes, repeat, log=_log, material=args.material)
     elif args.what == "peers":
-        from pdfem.bench.peers import print_peers
+        from pdfem.tools.bench.peers import print_peers
 
         print_peers(repeat, log=_log, grains=grains)
     else:
-        from pdfem.bench.startup import print_startup
+        from pdfem.tools.bench.startup import print_startup
 
         print_startup(repeat, cold=not args.warm_only, log=_log)
     return 0

@@ -6,7 +6,7 @@ spots (connected hot regions) with their size, peak, site and heating mechanism;
 run also the temperature against time since the front arrived. Writes
 ``<prefix>-hotspots.csv``, ``-hotspots-spots.csv``, ``-hotspots.json``,
 ``-hotspots-front.csv`` (shock runs) and the figures (definitions:
-:mod:`pdfem.analysis.hotspots`, docs/validation/hotspots.md).
+:mod:`pdfem.tools.analysis.hotspots`, docs/validation/hotspots.md).
 """
 
 import math
@@ -66,7 +66,7 @@ def _number(text, option, lo=0.0, hi=math.inf, lo_open=True):
 
 def _options(args):
     """(thresholds, spot threshold, contact tolerance, corner angle, plots) from ``args``."""
-    from pdfem.analysis.hotwrite import PLOT_FORMATS
+    from pdfem.tools.analysis.hotwrite import PLOT_FORMATS
 
     thr, spot = thresholds_of(args)
     tol = _number(args.contact_tol, "--contact-tol", 0.0, lo_open=False)
@@ -119,9 +119,9 @@ def _report(result, paths):
 
 
 def run(args):
-    from pdfem.analysis.hotcensus import census
-    from pdfem.analysis.hotwrite import output_files, write_outputs
     from pdfem.cli.paths import check_output_path, prefix_of
+    from pdfem.tools.analysis.hotcensus import census
+    from pdfem.tools.analysis.hotwrite import output_files, write_outputs
 
     if not args.runfile:
         raise InputError("runfile: empty file name")

@@ -31,7 +31,7 @@ def run_outputs(out, scene, plots=None, restart=None):
     """Every file a run of ``scene`` into ``out`` may leave: the run file, its XDMF sidecar,
     its checkpoint (unless it is the ``restart`` being continued) and, for a shock scene, the
     analysis (summary, and figures unless ``plots`` or the scene's shock.plots is "none")."""
-    from pdfem.analysis.summary import output_files, thermal_fields
+    from pdfem.tools.analysis.summary import output_files, thermal_fields
 
     files = [out, os.path.splitext(out)[0] + ".xdmf"]
     if os.path.abspath(files[0]) == os.path.abspath(files[1]):
@@ -95,9 +95,9 @@ def shock_report(out, summary, comm, quiet):
     """Analyse a finished shock run on rank 0: figures, summary JSON and text next to it."""
     import time
 
-    from pdfem.analysis import analyse
-    from pdfem.analysis.summary import report_text
     from pdfem.parallel.mpi import barrier
+    from pdfem.tools.analysis import analyse
+    from pdfem.tools.analysis.summary import report_text
 
     if comm.rank == 0:
         t0 = time.perf_counter()

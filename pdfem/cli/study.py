@@ -48,7 +48,7 @@ def _check(vals, ok, option, what):
 
 def _rules(text):
     """The --rules list: 1pt and/or 2x2, in that order."""
-    from pdfem.study.accuracy import RULES
+    from pdfem.tools.study.accuracy import RULES
 
     names = {v.strip() for v in text.split(",") if v.strip()}
     bad = sorted(names - set(RULES))
@@ -91,7 +91,7 @@ def _accuracy_args(p):
 
 
 def _convergence_args(p):
-    from pdfem.study.convergence import SIZES
+    from pdfem.tools.study.convergence import SIZES
 
     p.add_argument("--sizes", default=",".join(map(str, SIZES)), help="meshes n x n of the "
                    "block; orders between successive sizes (default "
@@ -123,8 +123,8 @@ def _outputs(prefix, force):
 def _accuracy(args):
     from pdfem.parallel.mpi import barrier, world
     from pdfem.scene import check_ranks, load_scene
-    from pdfem.study import accuracy as acc
-    from pdfem.study import pareto
+    from pdfem.tools.study import accuracy as acc
+    from pdfem.tools.study import pareto
 
     comm = world()
     # Options
@@ -166,7 +166,7 @@ def _accuracy(args):
     rows = study.run_all(levels, rules, safeties, scales, args.tol, base_given)
     # The files, the table and the recommendation
     if comm.rank == 0:
-        from pdfem.study.plots import accuracy_plot
+        from pdfem.tools.study.plots import accuracy_plot
 
         pareto.write_csv(rows, args.prefix + ".csv")
         accuracy_plot(rows, args.tol, args.prefix + ".png")
@@ -187,7 +187,7 @@ def _accuracy(args):
 def _print_convergence(comm, sizes, rules):
     """The element's convergence order, computed serially on rank 0."""
     from pdfem.parallel.mpi import barrier
-    from pdfem.study.convergence import observed_orders, report_lines
+    from pdfem.tools.study.convergence import observed_orders, report_lines
 
     if comm.rank == 0:
         print("\n".join(report_lines(observed_orders(sizes, rules))), flush=True)
@@ -206,7 +206,7 @@ def _convergence(args):
 
 
 def _hard_args(p):
-    from pdfem.study.hard_cases import CASES, LARGE_ONLY
+    from pdfem.tools.study.hard_cases import CASES, LARGE_ONLY
 
     p.add_argument("--size", choices=("ci", "large"), default="large", help="ci: the "
                    "seconds-long versions the test suite runs; large: the study's (default)")
@@ -222,8 +222,8 @@ def _hard(args):
     import json
 
     from pdfem.parallel.mpi import barrier, world
-    from pdfem.study.hard import print_rows, run_case
-    from pdfem.study.hard_cases import CASES, LARGE_ONLY
+    from pdfem.tools.study.hard import print_rows, run_case
+    from pdfem.tools.study.hard_cases import CASES, LARGE_ONLY
 
     comm = world()
     if comm.size < 2:
@@ -282,7 +282,7 @@ def _width(args):
 
     from pdfem.cli.paths import check_output_path
     from pdfem.parallel.mpi import barrier, world
-    from pdfem.study import width as ws
+    from pdfem.tools.study import width as ws
 
     widths = _check(_numbers(args.widths, "--widths"), lambda v: 1.0 <= v <= 4096.0,
                     "--widths", "a width in [1, 4096] grains")
@@ -305,7 +305,7 @@ def _width(args):
     rows = ws.run_study(widths, args.seeds, args.seed_width, folder, comm,
                         lambda s: print(s, flush=True), args.allow_huge)
     if comm.rank == 0:
-        from pdfem.analysis.summary import _plain
+        from pdfem.tools.analysis.summary import _plain
 
         table, found = ws.table_lines(rows), ws.conclusions(rows)
         print("", *table, "", *found, sep="\n")
@@ -341,7 +341,7 @@ def _hotspots(args):
     from pdfem.cli.paths import check_output_path
     from pdfem.parallel.mpi import barrier, world
     from pdfem.scene import check_ranks, load_scene, parse_scene
-    from pdfem.study import hotspots as hs
+    from pdfem.tools.study import hotspots as hs
 
     comm = world()
     levels = _check(_numbers(args.levels, "--levels", int), lambda v: 1 <= v <= 10,
@@ -376,7 +376,7 @@ def _hotspots(args):
     barrier(comm)
     rows, chg = study.run_all(levels, thresholds, spot)
     if comm.rank == 0:
-        from pdfem.analysis.summary import _plain
+        from pdfem.tools.analysis.summary import _plain
 
         print("", *hs.table_lines(rows, chg), sep="\n")
         with open(args.prefix + ".csv.part", "w") as f:

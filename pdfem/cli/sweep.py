@@ -1,7 +1,7 @@
 """``pdfem sweep [scene.toml] --velocities 100,200,...``: the bed's compaction Hugoniot.
 
 The shock scene's hammer is driven as a piston at each speed for the snowplow transit time
-(:mod:`pdfem.study.hugoniot`); each run is analysed (steady fronts only are fitted). Writes
+(:mod:`pdfem.tools.study.hugoniot`); each run is analysed (steady fronts only are fitted). Writes
 the runs ``<prefix>-v<speed>.h5`` with their summaries, ``<prefix>.json`` (one row per speed)
 and ``<prefix>.png``: Us-up with the precursor, the snowplow bound and the crystal's Hugoniot;
 stress-density with the same and, with ``--static``, the bed's static compression curve
@@ -90,7 +90,7 @@ def run(args):
     from pdfem.cli.run import run_outputs
     from pdfem.packaged import default_scene_path
     from pdfem.scene import check_ranks, load_scene, parse_scene
-    from pdfem.study import hugoniot as hg
+    from pdfem.tools.study import hugoniot as hg
 
     # The input first (a bad one is reported before MPI and the solver load)
     speeds = _speeds(args.velocities)
@@ -127,12 +127,12 @@ def run(args):
                         name=f"{path} (piston at {v:g} m/s)")
             for v, us in zip(speeds, slowest, strict=True)]
     static = _static_scene(scene, doc, sh, H0, phi0) if args.static else None
-    from pdfem.analysis import analyse
-    from pdfem.analysis.plots import sweep_plot
     from pdfem.driver import run as drive
     from pdfem.limits import check_runs
     from pdfem.parallel.mpi import barrier, world
     from pdfem.solver import Simulation
+    from pdfem.tools.analysis import analyse
+    from pdfem.tools.analysis.plots import sweep_plot
 
     comm = world()
     check_ranks(scene, comm.size)
@@ -171,7 +171,7 @@ def run(args):
                   f"{_f(p['snowplow_us'])} m/s", flush=True)
     static = _static(args, static, sh, H0, phi0, width, comm) if args.static else None
     if comm.rank == 0:
-        from pdfem.analysis.summary import _plain
+        from pdfem.tools.analysis.summary import _plain
 
         checks = _checks(points)
         for line in checks:
@@ -193,7 +193,7 @@ def run(args):
 def _static_scene(scene, doc, sh, H0, phi0):
     """The checked scene of the static compression run and its snowplow stress floor."""
     from pdfem.scene import parse_scene
-    from pdfem.study import hugoniot as hg
+    from pdfem.tools.study import hugoniot as hg
 
     d, floor = hg.static_doc(doc, sh["hammer"], H0, phi0)
     return parse_scene(d, scene.base_dir, name=f"{scene.path} (static compression)"), floor
@@ -204,7 +204,7 @@ def _static(args, static, sh, H0, phi0, width, comm):
     (rank 0)."""
     from pdfem.driver import run as drive
     from pdfem.solver import Simulation
-    from pdfem.study import hugoniot as hg
+    from pdfem.tools.study import hugoniot as hg
 
     sc, floor = static
     out = args.prefix + "-static.h5"

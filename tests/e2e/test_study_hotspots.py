@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pdfem.scene.schema import HEAT_FIELDS
-from pdfem.study.hotspots import thermal_variant
+from pdfem.tools.study.hotspots import thermal_variant
 from tests.helpers import pdfem
 from tests.scenes import drifting_grains, packaged, write_scene
 

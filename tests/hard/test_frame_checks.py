@@ -1,4 +1,4 @@
-"""The hard-case verdict on a run file (pdfem.study.hard.frame_checks) against hand-built
+"""The hard-case verdict on a run file (pdfem.tools.study.hard.frame_checks) against hand-built
 frames: a square, a dart whose reflex corner has a negative Jacobian while its centre and
 Gauss points stay valid, and a non-finite frame."""
 
@@ -6,7 +6,7 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.study.hard import frame_checks
+from pdfem.tools.study.hard import frame_checks
 
 SQUARE = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
 # Corner 2 pushed past the diagonal 1-3: corner Jacobian (x3-x2)x(x1-x2)/4 = -0.05

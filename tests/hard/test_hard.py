@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from pdfem.study.hard import ENERGY_TOL
-from pdfem.study.hard_cases import CASES, LARGE_ONLY
+from pdfem.tools.study.hard import ENERGY_TOL
+from pdfem.tools.study.hard_cases import CASES, LARGE_ONLY
 from tests.helpers import pdfem
 
 CI_CASES = [c for c in CASES if c not in LARGE_ONLY]

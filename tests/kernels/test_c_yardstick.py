@@ -4,15 +4,15 @@ numbers."""
 import numpy as np
 import pytest
 
-from pdfem.bench.cap_yardstick import HMX, cap_state
-from pdfem.bench.cyardstick import load
-from pdfem.bench.numpy_element import bench_mesh
 from pdfem.kernels.cap import CAP_NST
 from pdfem.kernels.element import q4_forces_2x2
 from pdfem.kernels.element_1pt import q4_forces_1pt
 from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.params import BULK, CAP_T, ELASTIC, MODEL, NPAR, RHO, SHEAR
 from pdfem.material_point import cap_params_from_table
+from pdfem.tools.bench.cap_yardstick import HMX, cap_state
+from pdfem.tools.bench.cyardstick import load
+from pdfem.tools.bench.numpy_element import bench_mesh
 
 
 def test_c_twin_matches_numba_to_1e12():
@@ -38,7 +38,7 @@ def test_c_twin_matches_numba_to_1e12():
         assert np.max(np.abs(a - b)) <= 1e-12 * np.max(np.abs(a))
 
 
-# ---- the 2x2 element with the Sandler-Rubin cap model (bench/c/q4_2x2_cap.c) ----
+# ---- the 2x2 element with the Sandler-Rubin cap model (pdfem/tools/bench/c/q4_2x2_cap.c) ----
 
 STEEL = {"model": "cap", "density": 7850.0, "bulk": 160.0e9, "shear": 79.0e9, "A": 1.0e9,
          "B": 1.0e-9, "C": 5.0e8, "D": 1.0e-10, "R": 2.0, "W": 0.001, "kappa0": -5.0e9}
@@ -176,7 +176,7 @@ def test_c_2x2_cap_reports_the_same_failing_element(fault):
         assert _close(np.nan_to_num(a), np.nan_to_num(b))
 
 
-# ---- the contact pass (bench/c/contact_pass.c) ----
+# ---- the contact pass (pdfem/tools/bench/c/contact_pass.c) ----
 
 
 def test_contact_pass_twin_gives_numba_bits_on_a_settled_bed(tmp_path):
@@ -184,10 +184,10 @@ def test_contact_pass_twin_gives_numba_bits_on_a_settled_bed(tmp_path):
     # that step's candidates, history and positions writes the same rows, bit for bit
     from mpi4py import MPI
 
-    from pdfem.bench.beds import bed_scene, inflate_grains
-    from pdfem.bench.pass_yardstick import pass_yardstick
     from pdfem.scene import parse_scene
     from pdfem.solver import Simulation
+    from pdfem.tools.bench.beds import bed_scene, inflate_grains
+    from pdfem.tools.bench.pass_yardstick import pass_yardstick
 
     if load("contact_pass") is None:
         pytest.skip("no C compiler")

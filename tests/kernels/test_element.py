@@ -3,7 +3,6 @@
 import numpy as np
 import pytest
 
-from pdfem.bench.numpy_element import numpy_forces_1pt, numpy_forces_2x2
 from pdfem.kernels.elastic import elastic_energy_density, elastic_update
 from pdfem.kernels.element import q4_forces_2x2
 from pdfem.kernels.element_1pt import q4_forces_1pt
@@ -11,6 +10,7 @@ from pdfem.kernels.element_measures import q4_lumped_mass, q4_strain_energy
 from pdfem.kernels.params import BULK, CAP, ELASTIC, MODEL, NPAR, RHO, SHEAR
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.mesh.quality import jacobian_ratio
+from pdfem.tools.bench.numpy_element import numpy_forces_1pt, numpy_forces_2x2
 
 K = 1.0e10
 G = 6.0e9
@@ -290,9 +290,9 @@ def test_one_point_kernel_is_the_material_point_under_uniform_strain():
     call until the cap points yield: each element's stress and cap state are those of its
     material point (material.material_update with the mid-step strain increment
     e / (1 + e/2)), to rounding; the kernel's inline cap trial and return are cap_update's."""
-    from pdfem.bench.cap_yardstick import hmx_params
     from pdfem.kernels.cap import CAP_NST
     from pdfem.kernels.material import material_initial_state, material_update
+    from pdfem.tools.bench.cap_yardstick import hmx_params
 
     x, conn = grid(16, 12, 0.2, 5)
     x = x * 1e-4

@@ -1,0 +1,374 @@
+"""Summary of a shock run: front speed, jump conditions, snowplow bound, figures, JSON + text.
+
+Compressive stresses are quoted as positive numbers (-sigma_yy of the Cauchy stress).
+"""
+
+import json
+import math
+import os
+
+import numpy as np
+
+from pdfem.tools.analysis import compaction as cp
+from pdfem.tools.analysis import front as fr
+from pdfem.tools.analysis.runfile import read_run
+
+NAN = float("nan")
+# The files analyse writes after its prefix: the summary always, the figures with plots = "png"
+SUMMARY_SUFFIXES = ("-summary.json", "-summary.txt")
+FIGURE_SUFFIXES = ("-snapshots.png", "-gauges.png", "-xt.png", "-hugoniot.png")
+
+
+def output_files(prefix, plots="png", thermal=False):
+    """Paths of the files :func:`analyse` writes for ``prefix`` ([shock].plots = ``plots``);
+    with ``thermal`` (the frames hold temperatures) those of the hot-spot census too."""
+    from pdfem.tools.analysis.hotwrite import output_files as census_files
+
+    out = [prefix + s for s in SUMMARY_SUFFIXES + (FIGURE_SUFFIXES if plots == "png" else ())]
+    if thermal:
+        out += census_files(prefix, "png" if plots == "png" else "none", shock=True)
+    return out
+
+
+def thermal_fields(fields):
+    """Whether frame fields named ``fields`` hold temperatures (the census reads them)."""
+    return any(n in fields for n in ("element_temperature", "temperature"))
+
+
+def _plain(v):
+    """JSON-ready copy: numpy scalars to floats/ints, NaN/inf to None, arrays to lists."""
+    if isinstance(v, dict):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple, np.ndarray)):
+        return [_plain(x) for x in v]
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return float(v) if math.isfinite(v) else None
+    return v
+
+
+def _write(path, text):
+    """Write ``text`` to ``path`` atomically."""
+    with open(path + ".part", "w") as f:
+        f.write(text)
+    os.replace(path + ".part", path)
+
+
+def _momentum(run, fit, frames, sig_bed, t, hcomp):
+    """Stresses behind the front over the fit window: from the piston's contact force (a
+    driven hammer), the hammer's deceleration (a free one), the bed, the hammer gauge; and
+    which one the momentum check uses."""
+    t0, t1 = fit["t_start"], fit["t_end"]
+    hg = run.gauges[run.shock["hammer_gauge"]]
+    out = {"sigma_piston": cp.piston_stress(t, run.gauge_time, hg.get("force"), run.width,
+                                            t0, t1),
+           "sigma_hammer_deceleration": fr.deceleration_stress(
+               run.time, run.hammer_mean_vy, run.hammer_mass, run.width, frames),
+           "sigma_bed": sig_bed, "sigma_gauge": fr.window_mean(t, hcomp, t0, t1)}
+    driven = run.drive["driven"] and math.isfinite(out["sigma_piston"])
+    out["sigma_source"] = "piston force" if driven else "hammer deceleration"
+    out["sigma"] = out["sigma_piston"] if driven else out["sigma_hammer_deceleration"]
+    return out
+
+
+def compute(run):
+    """All the numbers of a :class:`~pdfem.tools.analysis.runfile.Run`: (summary dict, arrays)."""
+    sh, t = run.shock, run.time
+    rho_s, frac = float(sh["solid_density"]), float(sh["front_fraction"])
+    # Bed geometry and the initial bed density
+    diam = float(np.mean(run.grain_diam))
+    geo = fr.bed_geometry(run.grain_top0, run.hammer_y[0], run.anvil_y[0], diam)
+    H0 = geo["H0"]
+    rho0 = float(run.grain_mass.sum() / (run.width * H0))
+    # Compaction front (first passage of frac x the impact speed) and precursor (first
+    # motion): per-grain passage times, fitted against the grains' initial depths
+    v0 = float(-run.hammer_vy[0])
+    depth0 = geo["y_top0"] - run.grain_y[0]
+    tol = float(sh["steady_tolerance"])
+    fit = fr.steady_front(depth0, fr.passage_times(t, run.grain_vy, frac * v0), H0, tol)
+    pfit = fr.steady_front(depth0, fr.passage_times(
+        t, run.grain_vy, float(sh["precursor_fraction"]) * v0), H0, tol)
+    us = fit["us"]
+    # The front in the lab (layer scan, for the figures and the arrival) and its fitted line
+    args = (t, run.grain_y, run.grain_vy, run.grain_mass, run.hammer_y, run.hammer_vy,
+            run.anvil_y, geo["y_top0"], diam)
+    fp, pp = fr.front_positions(*args, frac), fr.front_positions(
+        *args, float(sh["precursor_fraction"]))
+    y_line = geo["y_top0"] - us * (t - fit["t0"])
+    frames = np.flatnonzero((t >= fit["t_start"]) & (t <= fit["t_end"]))
+    # Arrival at the bottom: the fitted front at H0, the detected front at the lowest layer's
+    # centre, the anvil gauge's rise
+    reach = geo["y_bottom0"] + 0.5 * diam
+    arr_front, arr_pre = fr.first_below(t, fp["y_f"], reach), fr.first_below(t, pp["y_f"],
+                                                                               reach)
+    hg, ag = run.gauges[sh["hammer_gauge"]], run.gauges[sh["anvil_gauge"]]
+    hcomp, acomp = -hg["stress"][:, 1], -ag["stress"][:, 1]
+    arr_fit = fit["t0"] + H0 / us if us > 0 else NAN
+    arr_gauge = fr.first_rise(run.gauge_time, acomp, 0.1)
+    # Compacted state over the window, from one layer behind the fitted front to the hammer
+    st = fr.shocked_state(frames, run.grain_y, run.grain_vy, run.grain_mass, run.hammer_y,
+                          run.hammer_vy, y_line, run.width, diam)
+    up, rho1 = st["up"], st["rho1"]
+    band = (run.grain_y > y_line[:, None] + diam) & (run.grain_y < run.hammer_y[:, None])
+    sig_bed = fr.bed_stress(run, frames, band, y_line + diam)
+    mom = _momentum(run, fit, frames, sig_bed, run.gauge_time, hcomp)
+    jc = fr.jump_closures(rho0, rho1, us, up, mom["sigma"])
+    closures = {k: fr.jump_closures(rho0, rho1, us, up, mom[k])["momentum"]
+                for k in ("sigma_piston", "sigma_hammer_deceleration", "sigma_bed",
+                          "sigma_gauge")}
+    snow, snow0 = fr.snowplow(up, rho0, rho_s), fr.snowplow(v0, rho0, rho_s)
+    comp = cp.compaction(t, run.grain_y, run.grain_mass, run.anvil_y, run.hammer_y,
+                         run.grain_top, H0)
+    # The whole bed's Hugoniot from the faces: a driven (rigid) hammer's face stress is the
+    # bed's push on it; a free hammer's, its gauge
+    face = hg["force"][:, 1] / run.width if run.drive["driven"] and hg.get("force") is not None \
+        else hcomp
+    hug = fr.hugoniot(t, run.hammer_y, run.anvil_y, H0, run.gauge_time, face, acomp, rho0)
+    # The 1997 report's numbers against the snowplow bound at its own density
+    rref, usref = float(sh["reference_density"]), sh["reference_us"]
+    rsref = float(sh.get("reference_solid_density", rho_s))
+    bal = run.energy.get("balance_error")
+    dr = run.drive
+    summary = {
+        "file": run.path,
+        "bed": {"H0": H0, "top_from": geo["top_from"], "width": run.width,
+                "n_grains": run.ng, "grain_mass": float(run.grain_mass.sum()),
+                "mean_grain_diameter": diam, "rho0": rho0, "phi0": rho0 / rho_s,
+                "reference_density": rref, "solid_density": rho_s,
+                "grain_material": run.grain_material},
+        "drive": {"kind": "piston" if dr["driven"] else "hammer", "impact_speed": v0,
+                  "release": dr["release"], "ramp_down": dr["ramp_down"],
+                  "face_deviation": cp.drive_deviation(
+                      t, run.hammer_vy, v0, arr_fit if np.isfinite(arr_fit) else arr_front)},
+        "front": {"us": us, "se": fit["se"], "steady": fit["steady"],
+                  "steadiness": fit["steadiness"], "note": fit["reason"],
+                  "us_fit": fit["us_fit"], "fit_t_start": fit["t_start"],
+                  "fit_t_end": fit["t_end"], "fit_grains": fit["n"],
+                  "fit_missing": fit["missing"],
+                  "fit_depth_range": [fit["lo"] * H0, fit["hi"] * H0], "fit_rms": fit["rms"],
+                  "front_fraction": frac, "layer": diam, "us_early": fit["us_early"],
+                  "us_late": fit["us_late"], "se_early": fit["se_early"],
+                  "se_late": fit["se_late"], "t_impact": fp["t_impact"],
+                  "arrival_front": arr_front, "arrival_fit": arr_fit,
+                  "arrival_gauge": arr_gauge},
+        "precursor": {"us": pfit["us"], "se": pfit["se"], "steady": pfit["steady"],
+                      "steadiness": pfit["steadiness"],
+                      "note": pfit["reason"], "us_fit": pfit["us_fit"],
+                      "us_early": pfit["us_early"], "us_late": pfit["us_late"],
+                      "se_early": pfit["se_early"], "se_late": pfit["se_late"],
+                      "fraction": float(sh["precursor_fraction"]),
+                      "arrival": arr_pre, "arrival_fit": pfit["t0"] + H0 / pfit["us"]},
+        "shocked": {"up": up, "hammer_speed": st["hammer_speed"], "rho1": rho1,
+                    "rho0_us_up": rho0 * us * up,
+                    "momentum_ahead": cp.momentum_ahead(frames, run.grain_y, run.grain_vy,
+                                                        run.grain_mass, y_line), **mom},
+        "jump": {"mass_closure": jc["mass"], "mass_strain_closure": jc["mass_strain"],
+                 "momentum_closure": jc["momentum"],
+                 "momentum_closure_piston": closures["sigma_piston"],
+                 "momentum_closure_deceleration": closures["sigma_hammer_deceleration"],
+                 "momentum_closure_bed": closures["sigma_bed"],
+                 "momentum_closure_gauge": closures["sigma_gauge"]},
+        "snowplow": {"us": snow["us"], "sigma": snow["sigma"], "rho1": snow["rho1"],
+                     "us_at_impact_speed": snow0["us"]},
+        "compaction": {k: comp[k] for k in ("peak", "t_peak", "final", "t_final", "kept",
+                                            "peak_height", "final_height")},
+        "gauges": {"hammer_peak": float(np.max(hcomp)) if hcomp.size else NAN,
+                   "anvil_peak": float(np.max(acomp)) if acomp.size else NAN},
+        "elastic_wave_speed": fr.elastic_speed(run.scene["materials"][run.grain_material]),
+        "energy": {"balance_error_last": float(bal[-1]) if bal is not None and bal.size else NAN,
+                   "balance_error_max": (float(np.max(np.abs(bal)))
+                                         if bal is not None and bal.size else NAN)},
+        "reference": {"us": usref, "arrival": sh["reference_arrival"], "density": rref,
+                      "solid_density": rsref, "impact_speed": v0,
+                      "us_min_at_impact_speed": v0 / (1.0 - rref / rsref),
+                      "up_max_at_reference_us": usref * (1.0 - rref / rsref),
+                      "up_allowed_by_our_us": us * (1.0 - rho0 / rho_s)},
+        "hugoniot": {"final_strain": float(hug["ev"][-1]),
+                     "final_density": float(hug["density"][-1]),
+                     "crystal": sh.get("crystal_hugoniot")},
+        "notes": list(run.notes),
+    }
+    hug["stress_deceleration"] = None if run.drive["driven"] else fr.deceleration_stress(
+        t, run.hammer_mean_vy, run.hammer_mass, run.width)
+    arrays = {"time": t, "y_f": fp["y_f"], "y_p": pp["y_f"], "y_line": y_line, "fit": fit,
+              "precursor_fit": pfit, "geo": geo, "hugoniot": hug, "compaction": comp["strain"]}
+    return summary, arrays
+
+
+def _f(v, scale=1.0, fmt=".1f"):
+    """A number scaled and formatted, or 'n/a'."""
+    return "n/a" if v is None or not math.isfinite(v) else format(v * scale, fmt)
+
+
+def _show(v):
+    """A run figure for the text report: wall times in seconds to 0.1 s."""
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {_show(x)}" for k, x in v.items())
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return str(v)
+
+
+def _speed_line(name, w):
+    """'Us = ... m/s (steady, ...)' or the reason there is none, for the front or precursor."""
+    if w["us"] is not None and math.isfinite(w["us"]):
+        return (f"{name} = {_f(w['us'])} +- {_f(w['se'])} m/s ({w['steadiness']}: "
+                f"{_f(w['us_early'])} +- {_f(w['se_early'])} m/s over 15-50 % of the depth, "
+                f"{_f(w['us_late'])} +- {_f(w['se_late'])} over 50-85 %)")
+    return f"{name}: none fitted, {w['note']}"
+
+
+def report_text(s):
+    """The short human-readable report of a summary dict (compression positive)."""
+    b, f, p, h, r = s["bed"], s["front"], s["precursor"], s["shocked"], s["reference"]
+    d, j, c, sn = s["drive"], s["jump"], s["compaction"], s["snowplow"]
+    drive = (f"piston driven at {_f(d['impact_speed'])} m/s"
+             + (f", brought to rest over {_f(d['ramp_down'], 1e6, '.2f')} us and released at "
+                f"{_f(d['release'], 1e6, '.2f')} us" if d["release"] is not None else "")
+             if d["kind"] == "piston" else f"free hammer at {_f(d['impact_speed'])} m/s")
+    lines = [
+        f"Shock run {s['file']}  (stresses compressive-positive)",
+        f"bed: H0 = {_f(b['H0'], 1e3, '.3f')} mm (top from {b['top_from']}), width "
+        f"{_f(b['width'], 1e3, '.3f')} mm, {b['n_grains']} grains of {b['grain_material']}, "
+        f"mean diameter {_f(b['mean_grain_diameter'], 1e3, '.3f')} mm",
+        f"rho0 = {_f(b['rho0'])} kg/m3 (experiment {_f(b['reference_density'])}), "
+        f"phi0 = {_f(b['phi0'], 1, '.3f')} of rho_s = {_f(b['solid_density'])}",
+        f"drive: {drive}; face speed within {_f(d['face_deviation'], 100)} % of it until the "
+        "front reached the bottom",
+        "compaction front (each grain's first passage of "
+        f"{f['front_fraction']} x the impact speed): " + _speed_line("Us", f),
+        "precursor (first motion, "
+        f"{p['fraction']} x the impact speed): " + _speed_line("speed", p),
+        f"  fit of {f['fit_grains']} grains' first passages against their depths "
+        f"{_f(f['fit_depth_range'][0], 1e3, '.2f')}-{_f(f['fit_depth_range'][1], 1e3, '.2f')} "
+        f"mm ({f['fit_missing']} never passed), rms scatter {_f(f['fit_rms'], 1e6, '.3f')} us; "
+        f"front passes them {_f(f['fit_t_start'], 1e6, '.2f')}-"
+        f"{_f(f['fit_t_end'], 1e6, '.2f')} us",
+        f"arrival at the bottom: compaction front {_f(f['arrival_front'], 1e6, '.2f')} us "
+        f"(fit {_f(f['arrival_fit'], 1e6, '.2f')} us), precursor "
+        f"{_f(p['arrival'], 1e6, '.2f')} us, anvil gauge rise "
+        f"{_f(f['arrival_gauge'], 1e6, '.2f')} us; report {_f(r['arrival'], 1e6, '.2f')} us",
+        f"behind the front: up = {_f(h['up'])} m/s (hammer face {_f(h['hammer_speed'])} m/s), "
+        f"rho1 = {_f(h['rho1'])} kg/m3; share of the bed's momentum ahead of the front "
+        f"{_f(h['momentum_ahead'], 100)} %",
+        f"stress behind the front: {_f(h['sigma'], 1e-6)} MPa ({h['sigma_source']}); "
+        f"rho0 Us up = {_f(h['rho0_us_up'], 1e-6)} MPa; read in the bed "
+        f"{_f(h['sigma_bed'], 1e-6)} MPa, hammer gauge {_f(h['sigma_gauge'], 1e-6)} MPa",
+        f"jump conditions: mass {_f(j['mass_closure'], 100)} %, in strain form (up/Us against "
+        f"1 - rho0/rho1) {_f(j['mass_strain_closure'], 100)} %; momentum "
+        f"{_f(j['momentum_closure'], 100)} % ({h['sigma_source']}), "
+        f"{_f(j['momentum_closure_bed'], 100)} % with the stress read in the bed",
+        f"snowplow bound at the measured up: Us >= {_f(sn['us'])} m/s (sigma "
+        f"{_f(sn['sigma'], 1e-6)} MPa); at the drive speed {_f(sn['us_at_impact_speed'])} m/s",
+        f"compaction strain (centre of mass): peak {_f(c['peak'], 1, '.3f')} at "
+        f"{_f(c['t_peak'], 1e6, '.2f')} us, final {_f(c['final'], 1, '.3f')} at "
+        f"{_f(c['t_final'], 1e6, '.2f')} us ({_f(c['kept'], 100, '.0f')} % of the peak kept); "
+        f"from the bed height: peak {_f(c['peak_height'], 1, '.3f')}, final "
+        f"{_f(c['final_height'], 1, '.3f')}",
+        f"peak gauge stresses: hammer {_f(s['gauges']['hammer_peak'], 1e-6)} MPa, anvil "
+        f"{_f(s['gauges']['anvil_peak'], 1e-6)} MPa",
+        f"elastic wave speed of the grains sqrt((K+4G/3)/rho) = {_f(s['elastic_wave_speed'])} m/s",
+        f"energy balance error: last {_f(s['energy']['balance_error_last'], 100, '.2f')} %, "
+        f"max {_f(s['energy']['balance_error_max'], 100, '.2f')} %",
+    ]
+    hs = s.get("hotspots")
+    if hs:
+        t = hs["shocked"]
+        lines.append(f"temperature behind the front at {_f(hs['time'], 1e6, '.2f')} us "
+                     f"(mass-weighted): mean {_f(t['mean'], 1, '.1f')} K, p99 "
+                     f"{_f(t['p99'], 1, '.1f')} K, p99.9 {_f(t['p99.9'], 1, '.1f')} K, max "
+                     f"{_f(t['max'], 1, '.1f')} K; {t['n_spots']} hot spot(s) above "
+                     f"{_f(hs['spot_threshold'], 1, '.0f')} K, at most {hs['most_spots']} "
+                     "(hot-spot census in -hotspots.*)")
+    lines += [
+        "",
+        "1997 report: a steady wave with up = "
+        f"{_f(r['impact_speed'])} m/s into {_f(r['density'])} kg/m3 of {_f(r['solid_density'])}"
+        f" kg/m3 crystal must run at >= up/(1 - rho0/rho_s) = "
+        f"{_f(r['us_min_at_impact_speed'])} m/s, so its "
+        f"{_f(r['us'])} m/s front implies up <= {_f(r['up_max_at_reference_us'])} m/s.",
+        f"This run (rho0/rho_s = {_f(b['phi0'], 1, '.3f')}): Us = {_f(f['us'])} m/s "
+        f"with up = {_f(h['up'])} m/s, arrival {_f(f['arrival_front'], 1e6, '.2f')} us against "
+        f"the report's {_f(r['arrival'], 1e6, '.2f')} us.",
+    ]
+    lines += [f"note: {n}" for n in s["notes"]]
+    if s.get("run"):
+        lines += ["", "run:"] + [f"  {k}: {_show(v)}" for k, v in s["run"].items()]
+    return "\n".join(lines) + "\n"
+
+
+def _figures(run, s, arrays, prefix):
+    """Draw the four figures of a run next to ``prefix``."""
+    from pdfem.tools.analysis import plots
+
+    t, fit, hug = arrays["time"], arrays["fit"], arrays["hugoniot"]
+    sh = run.shock
+    # Snapshots: five frames from the first impact to the end
+    if run.has_stress:
+        t0 = s["front"]["t_impact"]
+        k0 = int(np.searchsorted(t, t0)) if t0 is not None and math.isfinite(t0) else 0
+        ks = np.unique(np.linspace(min(k0, len(t) - 1), len(t) - 1, 5).round().astype(int))
+        frames = [(t[k], *run.frame(k)) for k in ks]
+        plots.snapshots_plot(frames, run.conn, prefix + "-snapshots.png",
+                             box=run.scene["domain"]["box"])
+    plots.gauges_plot(run.gauge_time, run.gauges[sh["hammer_gauge"]],
+                      run.gauges[sh["anvil_gauge"]], prefix + "-gauges.png", width=run.width)
+    plots.xt_plot(t, run.grain_y, arrays["y_f"], fit, arrays["geo"]["y_top0"], run.hammer_y,
+                  run.anvil_y, prefix + "-xt.png", y_p=arrays["y_p"])
+    b, sn, h = s["bed"], s["snowplow"], s["shocked"]
+    rho0, rho1 = b["rho0"], h["rho1"]
+    plots.hugoniot_plot(hug["ev"], hug["stress"], prefix + "-hugoniot.png",
+                        decel=hug["stress_deceleration"],
+                        snow=(1.0 - rho0 / b["solid_density"], sn["sigma"]),
+                        measured=(1.0 - rho0 / rho1 if rho1 > 0 else NAN, h["sigma"]))
+
+
+def analyse(run_path, prefix, extra=None):
+    """Analyse the shock run at ``run_path``; write ``<prefix>-summary.json``/``.txt`` and the
+    figures (with ``[shock].plots = "png"``); return the summary dict.
+
+    ``extra`` (e.g. wall times, packing from the preparation) is merged under ``"run"``. The
+    returned dict also holds ``"arrays"`` (front and Hugoniot time series), not in the JSON.
+    Raises :class:`pdfem.errors.InputError` for an unreadable file or one without [shock].
+    """
+    run = read_run(str(run_path))
+    summary, arrays = compute(run)
+    summary["run"] = dict(extra or {})
+    plots = run.shock.get("plots", "png")
+    if _holds_temperatures(run_path):
+        summary["hotspots"] = _census(run_path, prefix, plots)
+    plain = _plain(summary)
+    _write(prefix + "-summary.json", json.dumps(plain, indent=1) + "\n")
+    _write(prefix + "-summary.txt", report_text(plain))
+    if plots == "png":
+        _figures(run, summary, arrays, prefix)
+    return {**summary, "arrays": arrays}
+
+
+def _holds_temperatures(path):
+    import h5py
+
+    with h5py.File(path, "r") as f:
+        return thermal_fields(f["frames"])
+
+
+def _census(path, prefix, plots):
+    """The hot-spot census of a thermal shock run, its files written next to the summary;
+    the summary's part: the last frame behind the front and the most spots of any frame."""
+    from pdfem.tools.analysis.hotcensus import census
+    from pdfem.tools.analysis.hotwrite import write_outputs
+
+    result, maps = census(str(path))
+    write_outputs(result, maps, prefix, "png" if plots == "png" else "none")
+    last = result["frames"][-1]
+    region = last.get("shocked", last["whole"])
+    most = max(result["frames"], key=lambda fr: fr["whole"]["n_spots"])
+    keys = ("mean", "p50", "p90", "p99", "p99.9", "max", "n_spots")
+    return {"time": last["time"], "spot_threshold": result["settings"]["spot_threshold"],
+            "shocked": {k: region[k] for k in keys},
+            "area_fraction": region["area_fraction"],
+            "most_spots": most["whole"]["n_spots"], "most_spots_time": most["time"],
+            "heat_fields": result["heat_fields"]}

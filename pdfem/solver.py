@@ -77,6 +77,8 @@ class Simulation:
         for eff in self.effects:
             self.fields += [f for f in eff.extra_fields if f not in self.fields]
         self.halo_fields = ["x", "v"] + [n for e in self.effects for n in e.halo_fields]
+        # Element temperatures exist (store field eth) when heat couples into the elements
+        self.coupled = any(f.name == "eth" for f in self.fields)
         dom, tm = r["domain"], r["time"]
         self.box = tuple(dom["box"])
         self.grid = CellGrid(self.box, dom["cell_size"])
@@ -345,7 +347,7 @@ class Simulation:
         with self.timers.phase("elements"):
             bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
                                       s.mst, s.hgq, self.hg_coef, 0, s.ne_own, self.f, s.ewint,
-                                      s.ewp, getattr(s, "eth", NO_ETH))
+                                      s.ewp, s.eth if self.coupled else NO_ETH)
         if bad >= 0:
             self.fail(self._element_failure(bad))
         if self.has_contact:
@@ -373,7 +375,7 @@ class Simulation:
         s = self.store
         bad = first_nonfinite(self.f, s.nn_own)
         what = "force"
-        if bad < 0 and hasattr(s, "T"):
+        if bad < 0 and self.heat is not None:
             bad = first_nonfinite(s.T.reshape(-1, 1), s.nn_own)
             what = "temperature"
         if bad >= 0:

@@ -79,6 +79,8 @@ class Simulation:
         self.halo_fields = ["x", "v"] + [n for e in self.effects for n in e.halo_fields]
         # Element temperatures exist (store field eth) when heat couples into the elements
         self.coupled = any(f.name == "eth" for f in self.fields)
+        # Without it the 1-point kernel takes None (compiled without the thermal branches)
+        self.no_eth = None if el["rule"] == "1pt" else NO_ETH
         dom, tm = r["domain"], r["time"]
         self.box = tuple(dom["box"])
         self.grid = CellGrid(self.box, dom["cell_size"])
@@ -347,7 +349,7 @@ class Simulation:
         with self.timers.phase("elements"):
             bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
                                       s.mst, s.hgq, self.hg_coef, 0, s.ne_own, self.f, s.ewint,
-                                      s.ewp, s.eth if self.coupled else NO_ETH)
+                                      s.ewp, s.eth if self.coupled else self.no_eth)
         if bad >= 0:
             self.fail(self._element_failure(bad))
         if self.has_contact:

@@ -62,17 +62,22 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1,
     Updates sig (ne,1,4), mst (ne,1,nst) and hgq (ne,2) in place, subtracts the internal
     forces from f (nn,2) element by element, adds stress and hourglass work to ewint and
     plastic work to ewp. eth (ne, 3) couples temperature in (element.thermal_row; the
-    thermal-strain work goes to eth[:, 2]); shape (0, 3) leaves it out. Returns -1, or the
-    first element with a non-positive (mid-step or current) area, a non-finite cap input, a
-    failed cap return or an unknown material model.
+    thermal-strain work goes to eth[:, 2]); shape (0, 3) or None leaves it out, None in a
+    version compiled without the thermal branches (the solver's call without coupling).
+    Returns -1, or the first element with a non-positive (mid-step or current) area, a
+    non-finite cap input, a failed cap return or an unknown material model.
     """
     if sig.shape[1] != 1:
         raise ValueError("q4_forces_1pt needs sig of shape (ne, 1, 4)")
     has_hg = hgq.shape[0] > 0
-    has_th = eth.shape[0] > 0
     pbuf = np.empty(mat_params.shape[1])
     for e in range(e0, e1):
-        p, dth = thermal_row(mat_params[emat[e]], eth, e, has_th, pbuf)
+        p = mat_params[emat[e]]
+        dth = 0.0
+        # eth None: numba compiles this kernel without the thermal branches (dth stays 0.0)
+        if eth is not None:
+            if eth.shape[0] > 0:
+                p, dth = thermal_row(p, eth, e, True, pbuf)
         # Current coordinates, increments and mid-step coordinates of the 4 nodes
         n0 = conn[e, 0]
         n1 = conn[e, 1]
@@ -156,8 +161,9 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1,
             return e
         ewint[e] += wk * a
         ewp[e] += dwp * a
-        if has_th:
-            eth[e, 2] += wth * a
+        if eth is not None:
+            if eth.shape[0] > 0:
+                eth[e, 2] += wth * a
         # Stress divergence forces f_I = A sig . b_I
         fx0, fy0 = a * (t0 * bx0 + t2 * by0), a * (t2 * bx0 + t1 * by0)
         fx1, fy1 = a * (t0 * bx1 + t2 * by1), a * (t2 * bx1 + t1 * by1)

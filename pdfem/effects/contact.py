@@ -48,7 +48,6 @@ from pdfem.kernels.contact_step import (
 )
 from pdfem.kernels.heat import (
     accumulate_element_heat_sorted,
-    accumulate_heat_sorted,
     contact_heat,
 )
 from pdfem.kernels.integrate import ACC_CDAMP, ACC_CWORK, ACC_FRIC
@@ -378,8 +377,7 @@ class Contact(Effect):
         if forces:
             accumulate_sorted(order, active, nodes, fnod, s.nn_own, sim.fc)
         if q is not None:
-            accumulate_heat_sorted(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own,
-                                   sim.heat.src)
+            sim.heat.add_contact_heat(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own)
             accumulate_element_heat_sorted(order, active, elems, q[:, 0], q[:, 1], q[:, 2],
                                            q[:, 3], s.ne_own, s.eheat)
 

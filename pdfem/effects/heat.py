@@ -43,6 +43,7 @@ from pdfem.effects.thermal import fill_column
 from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.heat import (
     NHEAT,
+    accumulate_heat_sorted,
     advance_temperature,
     conduction_flows,
     conduction_stable_dt,
@@ -160,6 +161,12 @@ class Heat(Effect):
         with sim.timers.phase("heat"):
             element_thermal_state(s.T, s.tprev, s.conn, 0, s.ne_own, s.eth)
             s.tprev[: s.nn_own] = s.T[: s.nn_own]
+
+    def add_contact_heat(self, order, active, nodes, weights, qa, qb, n_owned):
+        """The contacts' heat of this step onto the owned nodes of their two sides, in the
+        given (key) order (pdfem.kernels.heat.accumulate_heat_sorted): the contact effect's
+        way into this effect's sources."""
+        accumulate_heat_sorted(order, active, nodes, weights, qa, qb, n_owned, self.src)
 
     def heat(self, sim):
         """Sources of this step onto the nodes, then the (sub-cycled) temperature update."""

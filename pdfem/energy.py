@@ -42,17 +42,37 @@ import numpy as np
 
 from pdfem.kernels.element_measures import q4_strain_energy
 from pdfem.kernels.fixed_point import column_extent, column_multiples
-from pdfem.kernels.integrate import ACC_BC, ACC_CDAMP, ACC_CWORK, ACC_DAMP, ACC_FRIC, body_sums
+from pdfem.kernels.integrate import ACC_BC, ACC_DAMP, body_sums
 from pdfem.parallel.mpi import array_max, broadcast, gather_rows, global_sum_exact
 
-TERMS = ("kinetic", "strain", "contact", "potential", "damping", "plastic", "friction",
-         "contact_damping", "contact_loss", "viscous", "bc_work", "thermal", "heat_paid",
-         "heat_bc", "coupling", "heat_sources", "thermal_work")
-SIGN = {"bc_work": -1.0, "heat_paid": -1.0, "heat_bc": -1.0}
-# Reported with the terms, not part of the balance: the contacts' share of its error, what
-# the heat sources put on the nodes and the stress work on the thermal strain (both are paid
-# by terms of the balance: heat_paid and coupling)
-DIAGNOSTIC = ("contact_loss", "heat_sources", "thermal_work")
+# The terms every run has, with their role in the balance: +1 a part of E, -1 subtracted
+# from it (work done on the bodies, heat that left them), 0 a diagnostic reported with the
+# terms and not part of E. Effects declare theirs (pdfem.effects.base.Effect.energy); a run's
+# terms are the core terms and those of its effects (run_terms)
+CORE_TERMS = (("kinetic", 1), ("strain", 1), ("plastic", 1), ("damping", 1), ("bc_work", -1))
+ROLES = dict(CORE_TERMS)
+
+
+def declare_terms(owner, pairs):
+    """Add an owner's (name, role) terms to :data:`ROLES`; a name may not change its role."""
+    for name, role in pairs:
+        if role not in (-1, 0, 1):
+            raise ValueError(f"energy term {name!r} of {owner}: role {role!r} is not -1, 0 or 1")
+        if ROLES.get(name, role) != role:
+            raise ValueError(f"energy term {name!r} of {owner}: role {role} differs from the "
+                             f"declared {ROLES[name]}")
+        ROLES[name] = role
+
+
+def run_terms(effects):
+    """The energy terms of a run: the core terms, then each effect's (in the effects'
+    order), each once."""
+    names = [n for n, _ in CORE_TERMS]
+    for eff in effects:
+        names += [n for n, _ in eff.energy if n not in names]
+    return tuple(names)
+
+
 # Per-step drift check: each body's multiples of the quantum stay below 2^QBITS / n_bodies,
 # so that their int64 sum cannot overflow
 QBITS = 62
@@ -62,33 +82,31 @@ FLOOR = 1e-12
 
 
 def body_terms(sim):
-    """(nb, len(TERMS)) array of per-body energy terms of the owned bodies of this rank."""
+    """(nb, len(sim.terms)) array of per-body energy terms of the owned bodies of this rank
+    (global bodies on rank 0 only), in the order of the run's terms."""
     s = sim.store
     nb = s.nb_own
-    rows = np.zeros((nb, len(TERMS)))
-    rows[:, TERMS.index("kinetic")] = sim.kin[:nb]
+    col = {t: i for i, t in enumerate(sim.terms)}
+    rows = np.zeros((nb, len(col)))
+    rows[:, col["kinetic"]] = sim.kin[:nb]
     # Internal energy of the elements: the stress work done on them (hourglass included)
     # less its plastic part, from the stored energy at t = 0 (see initial_strain_work)
-    col = np.empty(nb)
-    body_sums(s.ewint[: s.ne_own] - s.ewp[: s.ne_own], s.estart[:nb], s.ne[:nb], col)
-    rows[:, TERMS.index("strain")] = col
-    body_sums(s.ewp, s.estart[:nb], s.ne[:nb], col)
-    rows[:, TERMS.index("plastic")] = col
-    rows[:, TERMS.index("damping")] = s.acc[:nb, ACC_DAMP]
-    rows[:, TERMS.index("bc_work")] = s.acc[:nb, ACC_BC]
-    rows[:, TERMS.index("friction")] = s.acc[:nb, ACC_FRIC]
-    rows[:, TERMS.index("contact_damping")] = s.acc[:nb, ACC_CDAMP]
-    # Terms owned by effects (gravity potential, contact energy, ...), each effect's added
+    work = np.empty(nb)
+    body_sums(s.ewint[: s.ne_own] - s.ewp[: s.ne_own], s.estart[:nb], s.ne[:nb], work)
+    rows[:, col["strain"]] = work
+    body_sums(s.ewp, s.estart[:nb], s.ne[:nb], work)
+    rows[:, col["plastic"]] = work
+    rows[:, col["damping"]] = s.acc[:nb, ACC_DAMP]
+    rows[:, col["bc_work"]] = s.acc[:nb, ACC_BC]
+    # The effects' terms (gravity potential, contact energy, heat, ...), each effect's added
     for eff in sim.effects:
         extra = {}
         eff.energy_terms(sim, extra)
         for name, vals in extra.items():
-            rows[:, TERMS.index(name)] += vals[:nb]
-    # What the contacts absorbed beyond their stored energy and friction: the work done on
-    # them (minus the work their forces did on the bodies) less those two
-    ic, il = TERMS.index("contact"), TERMS.index("contact_loss")
-    jf, jd = TERMS.index("friction"), TERMS.index("contact_damping")
-    rows[:, il] = -s.acc[:nb, ACC_CWORK] - rows[:, ic] - rows[:, jf] - rows[:, jd]
+            if name not in col:
+                raise KeyError(f"effect {eff.name!r} gives the energy term {name!r}, which it "
+                               "does not declare (Effect.energy)")
+            rows[:, col[name]] += vals[:nb]
     # Global bodies are counted once, on rank 0
     if sim.comm.rank != 0:
         rows = rows[s.isglobal[:nb] == 0]
@@ -130,15 +148,16 @@ def global_terms(sim):
     rows = gather_rows(sim.comm, body_terms(sim))
     if rows is None:
         return None
-    return {t: math.fsum(rows[:, i]) for i, t in enumerate(TERMS)}
+    return {t: math.fsum(rows[:, i]) for i, t in enumerate(sim.terms)}
 
 
 def balance(terms, ref, floor=0.0):
     """Total energy and the balance error relative to the largest term (ref: t=0 terms), or
     to ``floor`` (energy_floor) when that is larger."""
-    parts = [t for t in terms if t not in DIAGNOSTIC]
-    total = sum(SIGN.get(t, 1.0) * terms[t] for t in parts)
-    total0 = sum(SIGN.get(t, 1.0) * ref[t] for t in parts)
+    # Correctly rounded sums (math.fsum): the same whatever the order of the run's terms
+    parts = [t for t in terms if ROLES[t] != 0]
+    total = math.fsum(ROLES[t] * terms[t] for t in parts)
+    total0 = math.fsum(ROLES[t] * ref[t] for t in parts)
     scale = balance_scale(terms, ref, floor)
     err = abs(total - total0) / scale if scale > 0 else 0.0
     return total, err
@@ -147,7 +166,7 @@ def balance(terms, ref, floor=0.0):
 def balance_scale(terms, ref, floor=0.0):
     """The balance's scale: the largest term now or at t = 0 (potential relative to t = 0),
     never below ``floor``."""
-    parts = [t for t in terms if t not in DIAGNOSTIC]
+    parts = [t for t in terms if ROLES[t] != 0]
     return max([abs(v[t] - (ref[t] if t == "potential" else 0.0)) for t in parts
                 for v in (terms, ref)] + [floor])
 
@@ -156,7 +175,7 @@ def fixed_point_terms(sim):
     """{term: global sum} on every rank, from integer multiples of a per-term quantum (see
     the module note), or None when a value is not finite."""
     sums = fixed_point_sums(body_terms(sim), sim.comm, sim.layout.nbody)
-    return None if sums is None else dict(zip(TERMS, sums, strict=True))
+    return None if sums is None else dict(zip(sim.terms, sums, strict=True))
 
 
 def fixed_point_sums(rows, comm, nbody):

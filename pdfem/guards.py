@@ -12,17 +12,10 @@ at each energy sample). This module keeps what a failure needs:
   would (rebuild of ghosts from the owned bodies, on any number of ranks), so the driver can
   either write it as a checkpoint (``<run file>.ckpt.h5``) or retry from it with half the time
   step (the ``dt_retries`` remedy);
-- the ``cap_contact`` remedy (:func:`contact_stiffness_cap`), applied once at set-up.
+- the ``cap_contact`` remedy is the contact's (:mod:`pdfem.effects.contact_cap`), applied once
+  at set-up.
 """
 
-import math
-
-import numpy as np
-
-from pdfem.kernels import contact_law as L
-from pdfem.kernels.contact_law import DT_FACTOR
-from pdfem.kernels.stable import q4_stable_dt
-from pdfem.parallel.mpi import global_min
 
 # What can help when a check fails, by the name its message starts with ("check NAME: ..."):
 # what a restart from the last good state may change, and what needs a new run
@@ -54,16 +47,15 @@ def advice(message):
     return ""
 
 
-class Snapshot:
-    """The state at the end of one good step (every rank holds its owned bodies)."""
+class LastGood:
+    """The last good state of the guards: the state's snapshot at the end of one good step
+    (every rank holds its owned bodies), the cell owners and the output's counters."""
 
-    def __init__(self, sim, driver):
-        s = sim.store
-        self.batch = s.take(np.arange(s.nb_own))
-        self.nb_own = s.nb_own
+    def __init__(self, sim, output):
+        self.state = sim.state.snapshot()
         self.owner = sim.owner.copy()
-        self.nstep, self.t, self.dt, self.dt_prev = sim.nstep, sim.t, sim.dt, sim.dt_prev
-        self.driver = dict(driver)
+        self.nstep = self.state.nstep
+        self.driver = dict(output)
 
 
 class Guards:
@@ -90,7 +82,7 @@ class Guards:
     def keep(self, sim, driver):
         """Keep the current state (the end of a step that passed every check) as last good;
         ``driver`` holds the output counters to restore with it."""
-        self.last = Snapshot(sim, driver)
+        self.last = LastGood(sim, driver)
 
     def rollback(self, sim):
         """Put the last good state back into ``sim`` (collective); return its driver dict."""
@@ -112,54 +104,3 @@ class Guards:
                 f"(t={sim.t:.6e} s), time step halved (time.safety {old:g} -> {sim.safety:g})")
         self.actions.append(line)
         return driver, line
-
-
-def contact_stiffness_cap(sim, contact, kcap=None):
-    """The ``cap_contact = "element"`` remedy: lower kn0 and the hardening of every contact law
-    so that a contact over a whole boundary edge of the initial meshes is no stiffer than the
-    elements' initial stable step allows (contact_law.contact_dt >= that step). Returns
-    (cap, log line or None when no law needed it); the same on every rank (global minima).
-    A restart passes the cap its run started with (kcap) so that it continues bit-identically."""
-    s, n = sim.store, sim.store.ne_own
-    if kcap is not None:
-        return kcap, _apply_cap(contact, kcap, None)
-    dt_el = global_min(sim.comm, q4_stable_dt(s.x, s.conn, s.emat, sim.mat_params, 0, n))
-    # Stiffness limit of each boundary edge: contact_dt(m, rigid, k L) >= dt_el
-    kcap = math.inf
-    for k in range(4):
-        on = s.ebnd[:n, k] != 0
-        a, b = s.conn[:n, k][on], s.conn[:n, (k + 1) % 4][on]
-        if a.shape[0]:
-            le = np.hypot(s.x[b, 0] - s.x[a, 0], s.x[b, 1] - s.x[a, 1])
-            m = np.minimum(s.m[a], s.m[b])
-            kcap = min(kcap, float(((2.0 * DT_FACTOR) ** 2 * m / (dt_el * dt_el * le)).min()))
-    kcap = global_min(sim.comm, kcap)
-    if not math.isfinite(kcap):
-        return None, None
-    return kcap, _apply_cap(contact, kcap, dt_el)
-
-
-def _apply_cap(contact, kcap, dt_el):
-    """Lower the contact laws to the stiffness cap; the log line (None when nothing changed)."""
-    law = contact.law
-    changed = False
-    kn0_old = float(law[:, :, L.P_KN0].max())
-    for i in range(law.shape[0]):
-        for j in range(law.shape[1]):
-            row = law[i, j]
-            for c in (L.P_KN0, L.P_KS):
-                if row[c] > kcap:
-                    row[c] = kcap
-                    changed = True
-            # The hardening stops where the tangent stiffness kn0/(1 - r)^2 reaches the cap
-            rc = 1.0 - math.sqrt(row[L.P_KN0] / kcap)
-            if rc < row[L.P_RCAP]:
-                row[L.P_RCAP] = rc
-                changed = True
-    contact.kn0_max = float(law[:, :, L.P_KN0].max())
-    if not changed or dt_el is None:
-        return None
-    return (f"guard: remedy cap_contact: contact stiffness capped at {kcap:.4g} Pa/m (kn0 "
-            f"{kn0_old:.4g} -> {contact.kn0_max:.4g}, hardening stops at delta/delta_max = "
-            f"{float(law[:, :, L.P_RCAP].min()):.4g}) so that contacts keep the elements' "
-            f"stable step {dt_el:.4g} s")

@@ -9,7 +9,7 @@ good state the guards keep and :meth:`RunOutput.restore` when they roll back to 
 
 import math
 
-from pdfem.energy import TERMS, balance, balance_scale, global_terms
+from pdfem.energy import balance, balance_scale, global_terms
 from pdfem.errors import SimulationError
 from pdfem.gauges import Gauges
 from pdfem.io.h5out import RunWriter
@@ -34,9 +34,10 @@ class Schedule:
 
 
 def energy_row(t, terms, ref, floor):
-    """One row of the energy series: t, the terms, the total and the balance error."""
+    """One row of the energy series: t, the terms (in the run's order), the total and the
+    balance error."""
     total, err = balance(terms, ref, floor)
-    return [t] + [terms[k] for k in TERMS] + [total, err]
+    return [t] + list(terms.values()) + [total, err]
 
 
 class RunOutput:
@@ -107,7 +108,8 @@ class RunOutput:
         every rank; 0.0 when there is none."""
         scale = 0.0
         if self.sim.comm.rank == 0:
-            scale = max([balance_scale(dict(zip(TERMS, r[1:1 + len(TERMS)], strict=True)),
+            names = self.sim.terms
+            scale = max([balance_scale(dict(zip(names, r[1:1 + len(names)], strict=True)),
                                        self.ref, self.sim.energy_floor)
                          for r in self.rows if r[0] > 0.0] + [0.0])
         return broadcast(self.sim.comm, scale)
@@ -144,7 +146,7 @@ class RunOutput:
 
     def close(self):
         """Finish the run file: energy series, gauges, rename into place (collective)."""
-        self.writer.close(self.rows, TERMS, ok=True, gauges=self.gauges)
+        self.writer.close(self.rows, self.sim.terms, ok=True, gauges=self.gauges)
 
     def suspend(self):
         """Leave the run file for a restart (collective)."""

@@ -14,20 +14,19 @@
 import numpy as np
 
 from partition import CellGrid, needs_rebalance, partition
-from pdfem import build
+from pdfem import build, setup
 from pdfem.drive import Drives
 from pdfem.effects import active_effects
 from pdfem.effects.base import hook_table
 from pdfem.effects.contact import check_contact_scene
-from pdfem.energy import energy_floor, initial_strain_work
-from pdfem.errors import InputError, SimulationError
-from pdfem.guards import Guards, contact_stiffness_cap
+from pdfem.effects.contact_cap import contact_stiffness_cap
+from pdfem.energy import energy_floor, initial_strain_work, run_terms
+from pdfem.errors import SimulationError
+from pdfem.guards import Guards
 from pdfem.kernels.checks import first_nonfinite
 from pdfem.kernels.element import q4_forces_2x2
 from pdfem.kernels.element_1pt import q4_forces_1pt
-from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, moves_half_skin
-from pdfem.kernels.material import material_initial_state
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
 from pdfem.mesh.quality import corner_jacobians
@@ -35,16 +34,13 @@ from pdfem.parallel.exchange import cell_reach, owned_grain_cells, rebuild
 from pdfem.parallel.mpi import (
     allgather_objects,
     array_max,
-    array_sum,
     global_any,
     global_min,
     global_sum_exact,
 )
-from pdfem.store import NODE, Batch, Field, Store, core_fields
+from pdfem.state import State
+from pdfem.store import core_fields
 from pdfem.timers import Timers
-
-# A restart's contact forces of the last step, carried with the nodes to their owners
-RESTART_FC = Field("restart_contact_force", NODE, (2,), np.float64)
 
 # Element temperatures of a run without thermo-mechanical coupling (the kernels skip them)
 NO_ETH = np.zeros((0, 3))
@@ -61,6 +57,8 @@ class Simulation:
         check_contact_scene(r)
         self.effects = active_effects(r, scene)
         self.effect_names = [e.name for e in self.effects]
+        # The run's energy terms: the core terms and the effects' (pdfem.energy.run_terms)
+        self.terms = run_terms(self.effects)
         # The temperature field's owner (None without [heat]): the handle the contact heat
         # and the diagnostics use
         self.heat = next((e for e in self.effects if e.name == "heat"), None)
@@ -68,7 +66,6 @@ class Simulation:
         self.gamma = damping[0].gamma if damping else 0.0
         self.mat_params = build.material_table(r["materials"])
         nst = build.check_materials(r["materials"], self.mat_params)
-        self.mat_ids = {name: i for i, name in enumerate(r["materials"])}
         el = r["element"]
         self.nip = 1 if el["rule"] == "1pt" else 4
         self.element_kernel = q4_forces_1pt if el["rule"] == "1pt" else q4_forces_2x2
@@ -95,10 +92,20 @@ class Simulation:
         # Stop and checkpoint requests: local flags, shared by the reduction of next_dt
         self.stop_requested = self.checkpoint_requested = False
         self.local_stop = self.local_ckpt = 0.0
-        self._build_initial(scene, init_state)
+        self.mat_ids = {name: i for i, name in enumerate(r["materials"])}
+        self.nst = nst
+        # Set-up: the first state's bodies, from the scene or the checkpoint, on their owners
+        store, self.owner, blocks = setup.initial_bodies(self, scene, init_state)
+        self.block_names, self.block_sets, self.nglobal = blocks.names, blocks.sets, len(blocks)
+        with self.timers.phase("migration"):
+            store, self.halo = self.rebuild(store)
         self.checkpoint = None
         if restart is not None:
-            self._build_restart(restart)
+            store, self.owner, self.checkpoint = setup.restart_bodies(self, restart)
+            with self.timers.phase("migration"):
+                store, self.halo = self.rebuild(store)
+            store = setup.drop_restart_forces(store, self.fields, self.checkpoint)
+        self.state = State(store, self.has_contact)
         for eff in self.effects:
             eff.setup(self)
         # The effects that use each step hook, listed once
@@ -111,20 +118,19 @@ class Simulation:
         # The set-up's temporaries are freed: give their pages back to the OS
         trim()
         self._fail_msg = ""
-        self.t, self.nstep = 0.0, 0
-        # No step has a length before the first next_dt: set-up evaluates forces at dt = 0
-        self.dt = self.dt_prev = 0.0
-        self.du = np.zeros_like(self.store.v)
-        self._fresh_arrays()
+        st = self.state
         if restart is not None:
             # Continue exactly where the checkpoint stopped
-            st = self.checkpoint.state
-            self.t, self.nstep, self.dt, self.dt_prev = st["t"], st["nstep"], st["dt"], \
-                st["dt_prev"]
+            ck = self.checkpoint.state
+            st.t, st.nstep, st.dt, st.dt_prev = ck["t"], ck["nstep"], ck["dt"], ck["dt_prev"]
             # A time step the remedy halved stays halved unless the scene asks for less
-            self.safety = min(self.safety, st.get("safety", self.safety))
+            self.safety = min(self.safety, ck.get("safety", self.safety))
             self.guards.retries_left = min(self.guards.retries,
-                                           st.get("dt_retries_left", self.guards.retries))
+                                           ck.get("dt_retries_left", self.guards.retries))
+            # The contact forces of the step before, for a frame written at the restart
+            saved = self.checkpoint.contact_force
+            if saved is not None and st.fc.shape[0]:
+                st.fc[: st.store.nn_own] = saved
             self.refresh_reductions()
             return
         # Forces at t = 0 and the first half step; energy accumulators from the t = 0 state
@@ -132,82 +138,26 @@ class Simulation:
         self.compute_forces()
         for eff in self.hooks["start_work"]:
             eff.start_work(self)
-        self.dt_prev = 0.0
-        self.dt = self.next_dt()
+        st.dt_prev = 0.0
+        st.dt = self.next_dt()
         self.advance_velocities(first=True)
 
-    # ------------------------------------------------------------------ setup
-    def _build_initial(self, scene, init_state):
-        """Mesh the grains this rank owns at t=0 and all blocks; distribute; lumped mass."""
-        comm, r = self.comm, self.resolved
-        g = scene.grains
-        ng = g["center"].shape[0]
-        cells = self.grid.cell_of(g["center"])
-        weights = np.bincount(cells, minlength=self.grid.ncell).astype(float)
-        self.owner = partition(r["domain"]["partition"], weights, self.grid.nx, self.grid.ny,
-                               comm.size)
-        mine = np.nonzero(self.owner[cells] == comm.rank)[0]
-        level = r["element"]["level"]
-        grains = build.grain_batch(self.fields, self.nip, self.fields_nst(), level,
-                                   mine.astype(np.int64), g["center"][mine], g["axes"][mine],
-                                   g["angle"][mine], g["velocity"][mine], g["material"][mine])
-        if "nodes" in g:
-            # A prepared bed: the grain meshes as the preparation left them
-            grains.a["x"] = g["nodes"][mine].reshape(-1, 2).copy()
-            grains.a["v"] = g["node_v"][mine].reshape(-1, 2).copy()
-        blocks = r.get("blocks", [])
-        bbatch, bsets = build.block_batch(self.fields, self.nip, self.fields_nst(), blocks, ng,
-                                          self.mat_ids)
-        self.block_names, self.block_sets = [b["name"] for b in blocks], bsets
-        self.nglobal = len(blocks)
-        first = np.concatenate(([0], np.cumsum(bbatch.a["nn"])[:-1])).astype(np.int64)
-        build.apply_bcs(bbatch, r.get("bc", []), self.box, [b["name"] for b in blocks], bsets,
-                        first)
-        build.apply_bcs(grains, [b for b in r.get("bc", []) if "wall" in b], self.box, [], [],
-                        [])
-        batch = Batch.concat(self.fields, [bbatch, grains])
-        material_initial_state(batch.a["mst"], batch.a["emat"], self.mat_params)
-        if "elem_sig" in g:
-            self._bed_stress(batch, g, mine, int(bbatch.a["ne"].sum()))
-        store = Store(self.fields, batch, batch.nbody)
-        q4_lumped_mass(store.x, store.conn, store.emat, self.mat_params, 0, store.ne_own,
-                       store.m)
-        if init_state is not None:
-            init_state(self, store)
-        with self.timers.phase("migration"):
-            self.store, self.halo = self.rebuild(store)
-
-    def _build_restart(self, path):
-        """Replace the initial bodies by a checkpoint's: every rank reads the global bodies
-        and a block of grains, and the rebuild moves each grain to the owner of its cell,
-        with the contact forces of its nodes riding along, and makes the ghosts."""
-        from pdfem.io.checkpoint import read_checkpoint
-
-        ck = read_checkpoint(path, self.fields, self.comm)
-        self.checkpoint = ck
-        _same_scene(path, ck.scene_text, self.scene.to_toml_string())
-        fields = self.fields + ([RESTART_FC] if ck.contact_force is not None else [])
-        if ck.contact_force is not None:
-            ck.batch.a[RESTART_FC.name] = ck.contact_force
-        store = Store(fields, Batch(fields, ck.batch.a), ck.batch.nbody)
-        # The partition of the checkpoint's grains: cell weights summed over the ranks
-        cells = owned_grain_cells(store, self.grid, self.nglobal)
-        weights = np.bincount(cells, minlength=self.grid.ncell).astype(float)
-        array_sum(self.comm, weights)
-        self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,
-                               self.grid.ny, self.comm.size)
-        with self.timers.phase("migration"):
-            store, self.halo = self.rebuild(store)
-        if ck.contact_force is not None:
-            # The owned nodes' forces for the first frame; the store without them
-            ck.contact_force = getattr(store, RESTART_FC.name)[: store.nn_own].copy()
-            store = Store(self.fields, Batch(self.fields, {f.name: getattr(store, f.name)
-                                                           for f in self.fields}),
-                          store.nb_own)
-        self.store = store
+    # ------------------------------------------------------------------ the state, read
+    # The state's fields by name, for effects, guards and io (read-only: the state's owner,
+    # this stepper, is the one that moves them)
+    store = property(lambda self: self.state.store, doc="The bodies (pdfem.store.Store).")
+    t = property(lambda self: self.state.t, doc="Time [s].")
+    dt = property(lambda self: self.state.dt, doc="Length of the next step [s].")
+    dt_prev = property(lambda self: self.state.dt_prev, doc="Length of the last step [s].")
+    nstep = property(lambda self: self.state.nstep, doc="Steps taken.")
+    f = property(lambda self: self.state.f, doc="Nodal forces of the step (nn, 2) [N/m].")
+    fc = property(lambda self: self.state.fc, doc="Their contact part ((0, 2): no contact).")
+    du = property(lambda self: self.state.du, doc="Position increments of the step [m].")
+    kin = property(lambda self: self.state.kin, doc="Kinetic energy per body [J/m].")
 
     def _cap_contact(self, restart):
-        """The cap_contact remedy (pdfem.guards); a restart reuses the checkpoint's cap."""
+        """The cap_contact remedy (pdfem.effects.contact_cap); a restart reuses the
+        checkpoint's cap."""
         self.contact_cap = None
         if self.resolved["guards"]["cap_contact"] == "off":
             return
@@ -217,31 +167,16 @@ class Simulation:
         if line:
             self.guards.actions.append(line)
 
-    def _bed_stress(self, batch, g, mine, e0):
-        """Stresses and material state of a prepared bed's grains (elements after e0)."""
-        sig, mst = g["elem_sig"], g["elem_mst"]
-        nip, nst = batch.a["sig"].shape[1], batch.a["mst"].shape[2]
-        if sig.shape[2] != nip or mst.shape[3] != nst:
-            raise InputError(f"grains_file: the bed file holds {sig.shape[2]} integration "
-                             f"point(s) and {mst.shape[3]} state variable(s) per element; this "
-                             f"scene has {nip} and {nst} (element.rule and the material models "
-                             "must be the preparation's)")
-        batch.a["sig"][e0:] = sig[mine].reshape(-1, nip, 4)
-        batch.a["mst"][e0:] = mst[mine].reshape(-1, nip, nst)
-
-    def fields_nst(self):
-        """Number of material state variables per integration point."""
-        return [f for f in self.fields if f.name == "mst"][0].shape[1]
-
     # ------------------------------------------------------------------ the step
     def step(self):
         """Advance one time step (see the module docstring for the order)."""
-        s = self.store
+        st = self.state
+        s = st.store
         # 1. positions to t + dt
         with self.timers.phase("integration"):
-            advance_positions(s.x, s.v, self.dt, s.nn_own, self.du)
-            self.t += self.dt
-            self.nstep += 1
+            advance_positions(s.x, s.v, st.dt, s.nn_own, st.du)
+            st.t += st.dt
+            st.nstep += 1
         # 2. neighbourhood: rebuild or halo refresh
         self.neighbourhood()
         # 3-5. internal, contact and body forces
@@ -250,46 +185,37 @@ class Simulation:
         for eff in self.hooks["heat"]:
             eff.heat(self)
         # 7. next dt, velocities, diagnostics
-        self.dt_prev = self.dt
-        self.dt = self.next_dt()
+        st.dt_prev = st.dt
+        st.dt = self.next_dt()
         self.advance_velocities()
 
     def neighbourhood(self):
         """Rebuild ghosts and migrate when the last step's reduction said that this step's
         position update may move a node half the skin (:meth:`next_dt`)."""
-        s = self.store
+        st = self.state
         if self.rebuild_next:
             with self.timers.phase("migration"):
                 self._rebalance()
-                self.store, self.halo = self.rebuild(s)
-            s = self.store
-            self._fresh_arrays()
+                store, self.halo = self.rebuild(st.store)
+            st.new_store(store)
             for eff in self.effects:
                 eff.after_rebuild(self)
         else:
             with self.timers.phase("halo"):
-                self.halo.refresh([getattr(s, n) for n in self.halo_fields])
+                self.halo.refresh([getattr(st.store, n) for n in self.halo_fields])
         # Step increments of ghosts are derived exactly as their owners computed them
-        self.du = self.dt * s.v
+        st.du = st.dt * st.store.v
 
-    def _fresh_arrays(self):
-        """The per-step arrays sized to the store, zeroed: the one place they are made (set-up,
-        a rebuild, a rollback): forces f, contact forces fc, kinetic energies kin."""
-        s = self.store
-        self.f = np.zeros_like(s.v)
-        self.fc = self.contact_force_array()
-        self.kin = np.zeros(s.nbody)
-
-    def restore(self, snap):
-        """Back to a last good state of the guards (:class:`pdfem.guards.Snapshot`)
-        (collective): its bodies rebuilt on its partition, its time and steps, the per-step
-        arrays fresh, the effects told, the reductions redone."""
-        self.owner = snap.owner.copy()
+    def restore(self, last):
+        """Back to a last good state of the guards (:class:`pdfem.guards.LastGood`)
+        (collective): the state of its snapshot with the ghosts rebuilt on its cell owners,
+        the effects told, the reductions redone."""
+        self.owner = last.owner.copy()
+        st = State.from_snapshot(last.state, self.has_contact)
         with self.timers.phase("migration"):
-            self.store, self.halo = self.rebuild(Store(self.fields, snap.batch, snap.nb_own))
-        self.nstep, self.t, self.dt, self.dt_prev = snap.nstep, snap.t, snap.dt, snap.dt_prev
-        self.du = np.zeros_like(self.store.v)
-        self._fresh_arrays()
+            store, self.halo = self.rebuild(st.store)
+        st.new_store(store)
+        self.state = st
         self._fail_msg = ""
         self.stop_requested = False
         for eff in self.effects:
@@ -300,7 +226,7 @@ class Simulation:
         """The time-step remedy: time step and time.safety halved; returns the old safety."""
         old = self.safety
         self.safety *= 0.5
-        self.dt *= 0.5
+        self.state.dt *= 0.5
         return old
 
     def request_stop(self):
@@ -342,8 +268,9 @@ class Simulation:
 
     def compute_forces(self):
         """Residual force f = P - I on owned nodes: elements, contact, body forces."""
-        s = self.store
-        self.f[:] = 0.0
+        st = self.state
+        s = st.store
+        st.f[:] = 0.0
         for eff in self.hooks["before_elements"]:
             eff.before_elements(self)
         with self.timers.phase("elements"):
@@ -354,10 +281,10 @@ class Simulation:
             self.fail(self._element_failure(bad))
         if self.has_contact:
             # The contacts' forces go to fc (their work is accounted per body), then to f
-            self.fc[:] = 0.0
+            st.fc[:] = 0.0
             for eff in self.hooks["contact_forces"]:
                 eff.contact_forces(self)
-            self.f += self.fc
+            st.f += st.fc
         for eff in self.hooks["body_force"]:
             eff.body_force(self)
         self._check_finite()
@@ -437,10 +364,6 @@ class Simulation:
         for e in self.minima:
             e.set_step_minimum(self, global_min(self.comm, e.step_minimum(self)))
 
-    def contact_force_array(self):
-        """Zeroed contact forces of the store's nodes; shape (0, 2) without contact."""
-        return np.zeros_like(self.store.v) if self.has_contact else np.zeros((0, 2))
-
     def fail(self, msg):
         """Record a failed check; all ranks stop together at the end of the step."""
         if not self._fail_msg:
@@ -456,22 +379,3 @@ class Simulation:
             advance_velocities(s.v, self.f, s.m, s.bcf, s.bcv, self.gamma, dt_avg, s.nn_own,
                                s.node_body, s.acc, self.kin[: s.nb_own], first, self.fc)
 
-
-def _same_scene(path, saved, given):
-    """A restart must run the checkpoint's scene; only [output], [guards] and the time keys
-    end, safety, dt_min and max_steps may change."""
-    import tomllib
-
-    a, b = tomllib.loads(saved), tomllib.loads(given)
-    for d in (a, b):
-        d.pop("output", None)
-        d.pop("guards", None)
-        for key in ("end", "safety", "dt_min", "max_steps"):
-            d.get("time", {}).pop(key, None)
-    if a == b:
-        return
-    for key in sorted(set(a) | set(b)):
-        if a.get(key) != b.get(key):
-            raise InputError(f"--restart: {path} was written for a different scene ([{key}] "
-                             "differs; only [output], [guards], time.end, time.safety, "
-                             "time.dt_min and time.max_steps may change)")

@@ -210,13 +210,16 @@ def inline_shock():
 
 
 def every_field_shock():
-    """inline_shock() with [heat] and every frame field the run file can hold."""
-    from pdfem.scene.schema import OUTPUT_FIELDS
+    """inline_shock() with [heat] and every frame field the run file can hold (the core
+    fields and those every built-in effect declares)."""
+    from pdfem.effects import REGISTRY
 
+    fields = ["x", "v", "stress"] + [n for cls in REGISTRY.values()
+                                     for n in (*cls.frame_fields, *cls.outputs)]
     doc = inline_shock()
     doc["materials"]["hmx"]["specific_heat"] = 1444.0
     doc["materials"]["steel"]["specific_heat"] = 450.0
-    doc["output"]["fields"] = list(OUTPUT_FIELDS)
+    doc["output"]["fields"] = fields
     doc["heat"] = {}
     return doc
 

@@ -38,7 +38,7 @@ def test_head_on_collision_exchanges_velocities(tmp_path):
         s = sim.store
         # Momentum to round-off at every step
         assert np.abs((s.m[:, None] * s.v).sum(0)).max() <= 1e-12 * scale
-        n = int((_contact(sim)._last["active"] == C_ACTIVE).sum())
+        n = int((_contact(sim).last["active"] == C_ACTIVE).sum())
         touched |= n > 0
         if touched and n == 0:
             break
@@ -60,7 +60,7 @@ def _collide(tmp_path, damping, v0=20.0):
     touched = False
     while sim.t < sim.t_end:
         sim.step()
-        n = int((_contact(sim)._last["active"] == C_ACTIVE).sum())
+        n = int((_contact(sim).last["active"] == C_ACTIVE).sum())
         touched |= n > 0
         if touched and n == 0:
             break
@@ -132,7 +132,7 @@ def test_grain_at_rest_on_the_floor_carries_its_weight(tmp_path):
             terms = global_terms(sim)
             calm = calm + 1 if abs(terms["kinetic"]) < 1e-6 * (pe0 - terms["potential"]) else 0
     assert calm == 10
-    last = _contact(sim)._last
+    last = _contact(sim).last
     on = last["active"] == C_ACTIVE
     assert on.any()
     assert last["fnod"][on, :4, 1].sum() == pytest.approx(weight, rel=0.005)
@@ -187,7 +187,7 @@ def test_no_contact_missed_on_a_dense_bed(tmp_path):
     for _ in range(12000):
         sim.step()
     s, eff = sim.store, _contact(sim)
-    found = {tuple(k) for k, a in zip(eff._last["keys"], eff._last["active"], strict=True)
+    found = {tuple(k) for k, a in zip(eff.last["keys"], eff.last["active"], strict=True)
              if a == C_ACTIVE and k[2] >= 0}
     assert len(found) > 60
     bbox = np.empty((s.nelem, 4))
@@ -216,7 +216,7 @@ def test_no_contact_missed_on_a_dense_bed(tmp_path):
                         np.empty((nw, 8, 2)), np.empty(nw), np.empty((nw, NRES)), s.m, 0.0)
     floor = {(s.elem_gid[e], s.elem_loc[e]) for e, x in zip(cand, wact, strict=True)
              if x == C_ACTIVE}
-    found_floor = {(k[0], k[1]) for k, a in zip(eff._last["keys"], eff._last["active"],
+    found_floor = {(k[0], k[1]) for k, a in zip(eff.last["keys"], eff.last["active"],
                                                 strict=True)
                    if a == C_ACTIVE and k[2] == -2}
     assert floor == found_floor and len(floor) > 0

@@ -32,10 +32,20 @@ class CapPlasticity(Effect):
     """
 
     name = "cap_plasticity"
+    frame_fields = {"kappa": ("elem", ()), "plastic_strain": ("elem", (4,))}
+    frame_defaults = ("kappa", "plastic_strain")
+    needs = "a cap material"
 
     @staticmethod
     def present(resolved):
         return any(m.get("model") == "cap" for m in resolved["materials"].values())
+
+    def frame_values(self, sim, name, nodes, elems):
+        """kappa and the plastic strains (xx, yy, xy, zz), element means."""
+        mst = sim.store.mst
+        if name == "kappa":
+            return mst[elems, :, 0].mean(axis=1)
+        return mst[elems, :, 2:6].mean(axis=1)
 
 
 class ContactFriction(Effect):
@@ -90,8 +100,7 @@ def register(cls):
 
 def is_present(name, resolved):
     """True when the scene asks for effect ``name``."""
-    cls = REGISTRY[name]
-    return cls.present(resolved) if hasattr(cls, "present") else name in resolved
+    return REGISTRY[name].present(resolved)
 
 
 def active_effects(resolved, scene=None):

@@ -13,6 +13,9 @@ A disabled effect is never constructed, so it allocates nothing and runs no kern
 
 import numpy as np
 
+from pdfem.energy import declare_terms
+from pdfem.io.layout import declare_frame_fields
+
 
 class Effect:
     """Base class: every hook is a no-op; subclasses override the ones they use."""
@@ -24,9 +27,32 @@ class Effect:
     # added with pdfem.effects.register; the built-in effects' tables are in the schema
     section = None
     requires = ()
+    # Its terms of the energy balance (pdfem.energy): (name, role) pairs, role +1 a part of
+    # E, -1 subtracted from it, 0 a diagnostic; energy_terms gives their per-body values
+    energy = ()
+    # Its frame fields of the run file: name -> (per "node" or "elem", trailing shape per row,
+    # None standing for the integration-point count); frame_values gives their rows. Those in
+    # frame_defaults are written when the scene does not list output.fields; ``outputs`` are
+    # its other entries of output.fields (not frame datasets); ``needs`` says in words what a
+    # scene needs for it, for the error naming a field it cannot have
+    frame_fields = {}
+    frame_defaults = ()
+    outputs = ()
+    needs = ""
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        declare_terms(cls.__name__, cls.energy)
+        declare_frame_fields(cls.__name__, cls.frame_fields)
 
     def __init__(self, table, scene):
         self.table = table
+
+    @classmethod
+    def present(cls, resolved):
+        """True when the scene (resolved tables) asks for this effect: by default, when its
+        table is there; effects that live in other tables override it."""
+        return cls.name in resolved
 
     def setup(self, sim):
         """Called once after the initial store exists."""
@@ -69,8 +95,13 @@ class Effect:
     def set_step_minimum(self, sim, value):
         """Receive the global minimum of :meth:`step_minimum`."""
 
+    def frame_values(self, sim, name, nodes, elems):
+        """The rows of its frame field ``name`` for the given local nodes or elements."""
+        raise NotImplementedError(f"effect {self.name!r} declares no frame field {name!r}")
+
     def energy_terms(self, sim, out):
-        """Add per-body energy terms of this effect: out maps term name -> (nb_own,) array."""
+        """Its per-body energy terms (declared in ``energy``): out maps term name ->
+        (nb_own,) array; a declared term left out is zero."""
 
 
 # The hooks of the step the solver calls through hook_table's lists

@@ -118,6 +118,13 @@ class Contact(Effect):
     """The report's frictional, no-tension, hardening contact (scene tables [contact], [walls])."""
 
     name = "contact"
+    # Stored energy, friction and normal-damping losses; contact_loss, what the contacts
+    # absorbed beyond those three, is a diagnostic (pdfem.energy)
+    energy = (("contact", 1), ("friction", 1), ("contact_damping", 1), ("contact_loss", 0))
+    # The contacts' nodal forces per frame; every contact of a frame's step (pdfem.io.contacts)
+    frame_fields = {"contact_force": ("node", (2,))}
+    outputs = ("contacts",)
+    needs = "the [contact] table"
 
     def __init__(self, table, scene):
         super().__init__(table, scene)
@@ -166,7 +173,11 @@ class Contact(Effect):
         self._rows = 0
         self._outputs(1024)
         self._boxes = np.empty((0, 4))
-        self._last = None
+        # The contacts of the last evaluation (active flags, keys, nodes, results, ...; None
+        # before the first), for the step limit, the diagnostics and the per-contact output
+        self.last = None
+        # Stored contact energy per local body at the last evaluation [J/m]
+        self.stored = np.zeros(0)
         self._q = None
 
     def setup(self, sim):
@@ -298,7 +309,7 @@ class Contact(Effect):
         self._check(sim, keys, active, res)
         self._apply(sim, keys, active, nodes, weights, fnod, res, elems, not added)
         self._bookkeeping(sim, keys, active, us_out, res, elems)
-        self._last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys,
+        self.last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys,
                       "candidates": cand.shape[0], "evaluated": nev, "elems": elems, "dt": dt,
                       "q": self._q}
 
@@ -384,11 +395,11 @@ class Contact(Effect):
     def _bookkeeping(self, sim, keys, active, us_out, res, elems):
         """New history table; contact energy and friction per body of side A (counted once)."""
         s = sim.store
-        self.energy = np.zeros(s.nbody)
+        self.stored = np.zeros(s.nbody)
         fric, damp = np.zeros(s.nbody), np.zeros(s.nbody)
         s.hkey, s.hval = contact_bookkeeping(active, keys, us_out, res, elems, s.elem_body,
                                              s.isglobal, s.nb_own, sim.comm.rank == 0,
-                                             self.energy, fric, damp)
+                                             self.stored, fric, damp)
         if self.friction:
             s.acc[:, ACC_FRIC] += fric
         if self.zeta_max > 0.0:
@@ -404,17 +415,17 @@ class Contact(Effect):
         dt = APPROACH * self.delta_min / (2.0 * vmax) if vmax > 0.0 else np.inf
         dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.elen, s.m, 0, s.ne_own, self.kn0_max,
                                   self.zeta_max))
-        if self._last is None:
+        if self.last is None:
             return dt
-        last = self._last
+        last = self.last
         return min(dt, contact_dt_min(last["active"], last["res"], self.zeta_max))
 
     def dt_limiter(self, sim, dt):
         """Words naming what limits the step to dt (for the time.dt_min error): the contact
         or boundary element whose limit it is, with body and element ids."""
         s = sim.store
-        if self._last is not None:
-            last = self._last
+        if self.last is not None:
+            last = self.last
             for p in np.nonzero(last["active"] == C_ACTIVE)[0]:
                 sl = slice(p, p + 1)
                 if contact_dt_min(last["active"][sl], last["res"][sl], self.zeta_max) <= dt:
@@ -432,12 +443,23 @@ class Contact(Effect):
     def start_work(self, sim):
         """At t = 0: the contact work accumulators start at minus the stored energy, so that
         the absorbed energy (energy.py, contact_loss) counts from the initial state."""
-        sim.store.acc[:, ACC_CWORK] -= self.energy
+        sim.store.acc[:, ACC_CWORK] -= self.stored
+
+    def frame_values(self, sim, name, nodes, elems):
+        """contact_force: the contacts' share of the nodal forces."""
+        return sim.fc[nodes]
 
     def energy_terms(self, sim, out):
-        e = getattr(self, "energy", None)
-        out["contact"] = e[: sim.store.nb_own] if e is not None and e.shape[0] >= \
-            sim.store.nb_own else np.zeros(sim.store.nb_own)
+        s = sim.store
+        nb = s.nb_own
+        stored = self.stored[:nb] if self.stored.shape[0] >= nb else np.zeros(nb)
+        out["contact"] = stored
+        out["friction"] = s.acc[:nb, ACC_FRIC]
+        out["contact_damping"] = s.acc[:nb, ACC_CDAMP]
+        # What the contacts absorbed beyond their stored energy and friction: the work done
+        # on them (minus the work their forces did on the bodies) less those two
+        out["contact_loss"] = (-s.acc[:nb, ACC_CWORK] - stored - s.acc[:nb, ACC_FRIC]
+                               - s.acc[:nb, ACC_CDAMP])
 
 
 def check_contact_scene(resolved):

@@ -10,6 +10,7 @@ class Gravity(Effect):
     """Body force of gravity; its work is the drop in the potential energy -m g.x."""
 
     name = "gravity"
+    energy = (("potential", 1),)
 
     def __init__(self, table, scene):
         super().__init__(table, scene)

@@ -42,6 +42,11 @@ from pdfem.effects.base import Effect
 from pdfem.effects.thermal import fill_column
 from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.heat import (
+    H_CONDUCTED,
+    H_FRICTION,
+    H_PLASTIC,
+    H_THERMOELASTIC,
+    H_VISCOUS,
     NHEAT,
     accumulate_heat_sorted,
     advance_temperature,
@@ -61,6 +66,12 @@ from pdfem.store import BODY, ELEM, NODE, Field
 # Columns of the per-body accumulator hacc
 HACC_SRC = 0  # heat put in by the sources [J/m]
 HACC_BC = 1  # heat put in by held (fixed-temperature) nodes [J/m]
+
+# The mechanisms of the element heat (frame fields heat_<mechanism>) and their eheat columns
+MECHANISM_COLUMN = {"plastic": H_PLASTIC, "viscous": H_VISCOUS,
+                    "thermoelastic": H_THERMOELASTIC, "friction": H_FRICTION,
+                    "conducted": H_CONDUCTED}
+MECHANISMS = tuple(MECHANISM_COLUMN)
 
 # Sub-steps of conduction per mechanical step are capped: more means a scene error
 NSUB_MAX = 10000
@@ -90,6 +101,15 @@ class Heat(Effect):
     """Nodal temperatures, their capacity and their explicit update."""
 
     name = "heat"
+    # The heat in the bodies, what paid for it and what left them; what the sources put on
+    # the nodes and the stress work on the thermal strain are diagnostics
+    energy = (("thermal", 1), ("heat_paid", -1), ("heat_bc", -1), ("coupling", 1),
+              ("heat_sources", 0), ("thermal_work", 0))
+    # Node temperatures, element means, and the heat each element received by mechanism
+    frame_fields = {"temperature": ("node", ()), "element_temperature": ("elem", ()),
+                    **{f"heat_{m}": ("elem", ()) for m in MECHANISMS}}
+    frame_defaults = tuple(frame_fields)
+    needs = "the [heat] table"
     halo_fields = ("T",)
 
     def __init__(self, table, scene):
@@ -219,6 +239,15 @@ class Heat(Effect):
             nsub = NSUB_MAX
         self.nsub = nsub
         return nsub
+
+    def frame_values(self, sim, name, nodes, elems):
+        """Temperatures of nodes, element means, element heat of one mechanism."""
+        s = sim.store
+        if name == "temperature":
+            return s.T[nodes]
+        if name == "element_temperature":
+            return s.T[s.conn[elems]].mean(axis=1)
+        return s.eheat[elems, MECHANISM_COLUMN[name.removeprefix("heat_")]]
 
     def energy_terms(self, sim, out):
         s = sim.store

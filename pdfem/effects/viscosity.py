@@ -13,6 +13,7 @@ class BulkViscosity(Effect):
     """Viscous pressure of compressing elements; its work is a dissipated energy term."""
 
     name = "bulk_viscosity"
+    energy = (("viscous", 1),)
     extra_fields = (Field("qv", ELEM, (), np.float64), Field("ewq", ELEM, (), np.float64))
 
     def __init__(self, table, scene):

@@ -42,7 +42,7 @@ from pdfem.io.gather import block_bounds, block_owner, to_blocks
 from pdfem.parallel.mpi import alltoallv
 from pdfem.store import BODY, ELEM, NODE, Batch, ranges
 
-FORMAT = 2
+FORMAT = 3
 # Group of each field kind
 GROUPS = {BODY: "bodies", NODE: "nodes", ELEM: "elems"}
 # The state entries every checkpoint holds (numbers), and the driver arrays

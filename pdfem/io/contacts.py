@@ -61,8 +61,8 @@ def contact_rows(sim):
     """(n, NCOL) float rows of the active contacts this rank counts at the last evaluation
     (none before the first); ids are exact in float64 (below 2^53)."""
     eff = next((e for e in sim.effects if e.name == "contact"), None)
-    last = getattr(eff, "_last", None)
-    if last is None or "elems" not in last:
+    last = eff.last if eff is not None else None
+    if last is None:
         return np.zeros((0, NCOL))
     s = sim.store
     active, keys, res, elems = last["active"], last["keys"], last["res"], last["elems"]

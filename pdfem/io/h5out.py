@@ -15,6 +15,7 @@ a checkpoint the frames continue in segment files joined at the end (:mod:`pdfem
 """
 
 import os
+from functools import partial
 
 import h5py
 import numpy as np
@@ -33,7 +34,6 @@ from pdfem.io.segments import (
     start_join,
 )
 from pdfem.io.xdmf import write_xdmf
-from pdfem.kernels.heat import H_CONDUCTED, H_FRICTION, H_PLASTIC, H_THERMOELASTIC, H_VISCOUS
 from pdfem.store import ranges
 
 
@@ -48,31 +48,24 @@ def frame_fields(nip, fields):
 
 
 def field_table(sim):
-    """{name: (node|elem, trailing shape, values(nidx, eidx))} of every frame field, laid out
+    """{name: (node|elem, trailing shape, values(nidx, eidx))} of the run's frame fields: the
+    core ones and those of its effects (Effect.frame_fields, Effect.frame_values), laid out
     as :data:`pdfem.io.layout.FRAME_LAYOUT` says."""
     s = sim.store
-
-    def emean(a, e):
-        return a[e].mean(axis=1)
-
     values = {
         "x": lambda n, e: s.x[n],
         "v": lambda n, e: s.v[n],
-        "temperature": lambda n, e: s.T[n],
-        "contact_force": lambda n, e: sim.fc[n],
         "stress": lambda n, e: s.sig[e],
-        "stress_cell": lambda n, e: emean(s.sig, e),
-        "kappa": lambda n, e: s.mst[e, :, 0].mean(axis=1),
-        "plastic_strain": lambda n, e: s.mst[e, :, 2:6].mean(axis=1),
-        "element_temperature": lambda n, e: s.T[s.conn[e]].mean(axis=1),
-        "heat_plastic": lambda n, e: s.eheat[e, H_PLASTIC],
-        "heat_viscous": lambda n, e: s.eheat[e, H_VISCOUS],
-        "heat_thermoelastic": lambda n, e: s.eheat[e, H_THERMOELASTIC],
-        "heat_friction": lambda n, e: s.eheat[e, H_FRICTION],
-        "heat_conducted": lambda n, e: s.eheat[e, H_CONDUCTED],
+        "stress_cell": lambda n, e: s.sig[e].mean(axis=1),
     }
-    return {name: (per, tuple(sim.nip if n is None else n for n in tail), values[name])
-            for name, (per, tail) in FRAME_LAYOUT.items()}
+    for eff in sim.effects:
+        for name in eff.frame_fields:
+            values[name] = partial(eff.frame_values, sim, name)
+    out = {}
+    for name, get in values.items():
+        per, tail = FRAME_LAYOUT[name]
+        out[name] = (per, tuple(sim.nip if n is None else n for n in tail), get)
+    return out
 
 
 class RunWriter:
@@ -246,14 +239,6 @@ class RunWriter:
             self.f.close()
             self.f = None
         self.comm.Barrier()
-
-    def restore_contact_force(self, sim, saved):
-        """Contact forces of this rank's frame rows from a checkpoint's (``saved``: the rows
-        of the owned nodes, in store order): the frame written at a restart shows the
-        forces of the step before."""
-        if sim.fc.shape[0] and saved is not None and saved.shape[0] == sim.store.nn_own:
-            nidx = self._rows(sim)[0]
-            sim.fc[nidx] = saved[nidx]
 
     def close(self, energy_rows, terms, ok=True, gauges=None):
         """Write the energy series and gauges (rank 0 holds them), close, rename into place.

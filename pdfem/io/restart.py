@@ -14,7 +14,6 @@ from contextlib import contextmanager
 import numpy as np
 
 from pdfem import sigterm
-from pdfem.energy import TERMS
 from pdfem.errors import InputError
 from pdfem.io.checkpoint import write_checkpoint
 from pdfem.io.segments import valid_segments
@@ -81,7 +80,7 @@ class Checkpointer:
         arrays = {}
         if sim.comm.rank == 0:
             arrays["energy_rows"] = np.array(output.rows)
-            arrays["energy_ref"] = np.array([output.ref[t] for t in TERMS])
+            arrays["energy_ref"] = np.array([output.ref[t] for t in sim.terms])
             if len(output.gauges):
                 t, h = output.gauges.history()
                 arrays["gauge_times"], arrays["gauge_rows"] = t, h
@@ -109,7 +108,7 @@ class Checkpointer:
         rows, ref = [], None
         if sim.comm.rank == 0:
             rows = [list(r) for r in arrays["energy_rows"]]
-            ref = dict(zip(TERMS, arrays["energy_ref"].tolist(), strict=True))
+            ref = dict(zip(sim.terms, arrays["energy_ref"].tolist(), strict=True))
             if "gauge_times" in arrays:
                 output.gauges.times = arrays["gauge_times"].tolist()
                 output.gauges.rows = list(arrays["gauge_rows"])
@@ -120,6 +119,5 @@ class Checkpointer:
             if sim.comm.rank == 0:
                 output.log(f"pdfem: warning: {writer.tmp} is missing; frames before "
                            f"t={sim.t:.6e} s are not in the new run file, which starts there")
-            writer.restore_contact_force(sim, sim.checkpoint.contact_force)
             writer.write_frame(sim)
         return rows, ref

@@ -16,7 +16,7 @@ import h5py
 import numpy as np
 
 from pdfem.errors import InputError
-from pdfem.io.layout import FRAME_LAYOUT
+from pdfem.io.layout import frame_layout
 
 # Gauge series: the shape after the gauge-time row, and whether every gauge has it
 GAUGE_SERIES = {"velocity": ((2,), True), "stress": ((4,), True), "force": ((2,), False)}
@@ -167,7 +167,7 @@ def _check_frames(f, path, nn, ne):
     nf = d.shape[0]
     _dataset(f, "frames/x", path)
     fr = f["frames"]
-    for field, (per, tail) in FRAME_LAYOUT.items():
+    for field, (per, tail) in frame_layout().items():
         if field not in fr:
             continue
         name = f"frames/{field}"

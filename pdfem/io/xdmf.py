@@ -12,6 +12,8 @@ from xml.sax.saxutils import quoteattr
 
 import h5py
 
+from pdfem.io.layout import frame_layout
+
 # Components of the 4-vectors (stress, plastic strain) and 2-vectors
 COMP4 = ("xx", "yy", "xy", "zz")
 COMP2 = ("x", "y")
@@ -34,11 +36,11 @@ def _attributes(f, fname, k):
     """Attribute elements of frame k: (name, center, dataset, component index or None)."""
     fr = f["frames"]
     out = []
-    for name, center in (("v", "Node"), ("temperature", "Node"), ("contact_force", "Node"),
-                         ("kappa", "Cell"), ("element_temperature", "Cell"),
-                         ("plastic_strain", "Cell")):
-        if name not in fr:
+    # Every frame field but the positions and the stresses (below), as the layout says
+    for name, (per, _) in frame_layout().items():
+        if name in ("x", "stress", "stress_cell") or name not in fr:
             continue
+        center = "Node" if per == "node" else "Cell"
         shp = fr[name].shape
         if len(shp) == 2:
             out.append((name, center, name, shp, None, None))

@@ -16,11 +16,6 @@ __all__ = ["OPTIONAL", "REQUIRED", "Derived", "Key", "Section"]
 # Names of materials and blocks
 NAME_PATTERN = r"[A-Za-z_][A-Za-z0-9_-]*"
 SIDES = ("left", "right", "bottom", "top")
-# Element heat by mechanism (cumulative since t = 0), frame fields of a run with [heat]
-HEAT_FIELDS = ("heat_plastic", "heat_viscous", "heat_thermoelastic", "heat_friction",
-               "heat_conducted")
-OUTPUT_FIELDS = ("x", "v", "stress", "temperature", "kappa", "plastic_strain",
-                 "element_temperature", "contact_force", "contacts") + HEAT_FIELDS
 
 # [domain]
 DOMAIN = {
@@ -328,8 +323,8 @@ OUTPUT = {
                   "frame; contact_force = the nodal force of the contacts (needs [contact]); "
                   "contacts = every active contact of the frame's step (key, point, normal, "
                   "overlap, width, forces, slip rate, frictional dissipation, heat conducted "
-                  "across) in /contacts/<frame> (needs [contact])",
-                  choices=OUTPUT_FIELDS),
+                  "across) in /contacts/<frame> (needs [contact]); an effect added with "
+                  "pdfem.effects.register may declare more"),
     "energy_interval": _pos("float", Derived("interval / 10"), "time between energy-balance "
                             "samples", "s"),
     "gauge_interval": _pos("float", Derived("energy_interval / 10"), "time between gauge "

@@ -81,9 +81,7 @@ def resolve(doc, base_dir):
         r["thermal_bc"] = [check_table(b, S.THERMAL_BC, f"thermal_bc[{i}]") for i, b in
                            enumerate(array_of_tables(doc["thermal_bc"], "thermal_bc"))]
     _heat_rules(r)
-    r["output"] = _output(doc.get("output", {}), r["time"]["end"], "heat" in r,
-                          any(m["model"] == "cap" for m in r["materials"].values()),
-                          "contact" in r)
+    r["output"] = _output(doc.get("output", {}), r["time"]["end"], r)
     r["gauges"] = _gauges(doc.get("gauges", []), r["blocks"])
     if "shock" in doc:
         r["shock"] = _shock(doc["shock"], r)
@@ -321,22 +319,28 @@ def _heat_rules(r):
             _known_block(bc["body"], names, f"thermal_bc[{i}].body")
 
 
-def _output(value, t_end, heat, cap=False, contact=False):
-    """[output]: derived intervals and fields; the output directory must be writable."""
+def _output(value, t_end, r):
+    """[output]: derived intervals and fields; the output directory must be writable. The
+    fields are the core frame fields and those the effects declare (Effect.frame_fields and
+    Effect.outputs); by default the core ones and the defaults of the scene's effects (r: the
+    tables resolved so far)."""
+    from pdfem.effects import REGISTRY
+    from pdfem.io.layout import CORE_FRAME
+
     o = check_table(value, S.OUTPUT, "output")
+    owner = {n: cls for cls in REGISTRY.values() for n in (*cls.frame_fields, *cls.outputs)}
     if "fields" not in o:
-        o["fields"] = (["x", "v", "stress"] + (["kappa", "plastic_strain"] if cap else [])
-                       + (["temperature", "element_temperature", *S.HEAT_FIELDS] if heat
-                          else []))
-    for name, ok, need in (("temperature", heat, "the [heat] table"),
-                           ("element_temperature", heat, "the [heat] table"),
-                           *((f, heat, "the [heat] table") for f in S.HEAT_FIELDS),
-                           ("kappa", cap, "a cap material"),
-                           ("plastic_strain", cap, "a cap material"),
-                           ("contact_force", contact, "the [contact] table"),
-                           ("contacts", contact, "the [contact] table")):
-        if name in o["fields"] and not ok:
-            raise SceneError("output.fields", f'"{name}" needs {need}')
+        o["fields"] = ["x", "v", "stress"] + [n for cls in REGISTRY.values()
+                                              if cls.frame_defaults and cls.present(r)
+                                              for n in cls.frame_defaults]
+    known = [n for n in CORE_FRAME if n != "stress_cell"] + list(owner)
+    for i, name in enumerate(o["fields"]):
+        if name not in known:
+            raise SceneError(f"output.fields[{i}]", "must be each one of "
+                             + ", ".join(f'"{n}"' for n in known) + f' (got "{name}")')
+        cls = owner.get(name)
+        if cls is not None and not cls.present(r):
+            raise SceneError("output.fields", f'"{name}" needs {cls.needs}')
     if "x" not in o["fields"]:
         raise SceneError("output.fields", 'must list "x" (the node positions of every frame)')
     o.setdefault("interval", t_end / 20.0)

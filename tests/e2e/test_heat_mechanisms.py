@@ -1,13 +1,18 @@
 """Heat by mechanism: the per-element fields add up to what the sources put in, each equals
 its paying mechanical term, and the run files are the same on 1 and 2 ranks."""
 
+import xml.etree.ElementTree as ET
+
 import numpy as np
 import pytest
 
+from pdfem.effects.heat import MECHANISMS
 from pdfem.io.contacts import COLUMNS
-from pdfem.scene.schema import HEAT_FIELDS
 from tests.helpers import datasets, pdfem
 from tests.scenes import packaged, write_scene
+
+# The heat-by-mechanism frame fields
+HEAT_FIELDS = tuple(f"heat_{m}" for m in MECHANISMS)
 
 BETA, GAMMA, FRACTION = 0.9, 0.8, 0.7
 
@@ -44,7 +49,11 @@ def runs(tmp_path_factory):
 
 
 def test_heat_by_mechanism_sums_to_the_sources_and_is_rank_count_free(runs):
-    _, one, two = runs
+    d, one, two = runs
+    # ParaView's sidecar shows every frame field the effects declare
+    grid = ET.parse(d / "h1.xdmf").getroot().find(".//Grid[@GridType='Uniform']")
+    names = {a.get("Name") for a in grid.findall("Attribute")}
+    assert {"temperature", "element_temperature", "kappa", *HEAT_FIELDS} <= names
     assert sorted(one) == sorted(two)
     for k in one:
         assert np.array_equal(one[k], two[k]), f"{k} differs on 2 ranks"

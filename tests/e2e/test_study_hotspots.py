@@ -8,10 +8,13 @@ import h5py
 import numpy as np
 import pytest
 
-from pdfem.scene.schema import HEAT_FIELDS
+from pdfem.effects.heat import MECHANISMS
 from pdfem.tools.study.hotspots import thermal_variant
 from tests.helpers import pdfem
 from tests.scenes import drifting_grains, packaged, write_scene
+
+# The heat-by-mechanism frame fields
+HEAT_FIELDS = tuple(f"heat_{m}" for m in MECHANISMS)
 
 
 def short_shot(tmp_path, end=3.0e-7):

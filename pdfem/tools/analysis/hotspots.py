@@ -27,13 +27,12 @@ Definitions (temperatures in K, SI otherwise):
 
 import numpy as np
 
-from pdfem.scene.schema import HEAT_FIELDS
+from pdfem.effects.heat import MECHANISMS
 from pdfem.tools.analysis.hotgeom import components, near_segments
 
 NAN = float("nan")
 PERCENTILES = (50.0, 90.0, 99.0, 99.9)
-# The mechanisms of the run's heat_<mechanism> frame fields (pdfem.scene.schema.HEAT_FIELDS)
-MECHANISMS = tuple(f.removeprefix("heat_") for f in HEAT_FIELDS)
+# The mechanisms of the run's heat_<mechanism> frame fields: pdfem.effects.heat.MECHANISMS
 SITES = ("contact", "corner", "surface", "interior")
 
 

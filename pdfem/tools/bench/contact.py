@@ -70,7 +70,7 @@ def _contact_effect(sim):
 
 def _coordination(eff, n):
     """Grain-grain coordination number (touching grain pairs x 2 / n) of the last step."""
-    keys = eff._last["keys"][eff._last["active"] == C_ACTIVE]
+    keys = eff.last["keys"][eff.last["active"] == C_ACTIVE]
     pairs = np.unique(keys[keys[:, 2] >= 0][:, [0, 2]], axis=0).shape[0]
     return 2.0 * pairs / n
 
@@ -88,8 +88,8 @@ def _sample(sim, eff, n, k):
         cpu += time.process_time() - c0
         step += time.perf_counter() - t0
         # Contact counts, outside the timed call
-        active += (eff._last["active"] == C_ACTIVE).sum() / n
-        evaluated += eff._last["evaluated"] / n
+        active += (eff.last["active"] == C_ACTIVE).sum() / n
+        evaluated += eff.last["evaluated"] / n
     return (step / k, (tm["contact_detection"] - d0) / k, (tm["contact_forces"] - f0) / k,
             evaluated / k, active / k, (tm["elements"] - e0) / k, cpu / k)
 

@@ -81,13 +81,12 @@ def contact_loss_share(path):
     """The contact_loss of largest magnitude over the run (signed: < 0 is energy the contact
     law gave back beyond what it stored), over the largest energy term at its sample or at
     t = 0 (the balance's scale)."""
-    from pdfem.energy import TERMS
-
     with h5py.File(path, "r") as f:
         e = f["energy"]
         loss = e["contact_loss"][...]
         i = int(np.argmax(np.abs(loss)))
-        scale = max(abs(float(e[t][j])) for t in TERMS for j in (0, i))
+        terms = [t for t in e if t not in ("time", "total", "balance_error")]
+        scale = max(abs(float(e[t][j])) for t in terms for j in (0, i))
         return float(loss[i]) / scale if scale > 0 else 0.0
 
 

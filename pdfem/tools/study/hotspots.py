@@ -20,8 +20,8 @@ import math
 import h5py
 import numpy as np
 
+from pdfem.effects.heat import MECHANISMS
 from pdfem.parallel.mpi import broadcast
-from pdfem.scene.schema import HEAT_FIELDS
 from pdfem.tools.study.accuracy import AccuracyStudy, Setting
 
 NAN = float("nan")
@@ -40,8 +40,8 @@ def thermal_variant(doc):
     fields = out.get("output", {}).get("fields")
     if fields is not None:
         # The census reads the element temperatures and the heat by mechanism
-        out["output"]["fields"] = list(dict.fromkeys(list(fields) + ["element_temperature",
-                                                                     *HEAT_FIELDS]))
+        heat = ["element_temperature"] + [f"heat_{m}" for m in MECHANISMS]
+        out["output"]["fields"] = list(dict.fromkeys(list(fields) + heat))
     if "heat" in out:
         return out
     for name in ("heat", "conduction", "dissipation_heating", "thermoelastic",
@@ -60,7 +60,7 @@ def mechanism_heat(path):
     with h5py.File(path, "r") as f:
         grain = f["mesh/body_kind"][()][f["mesh/elem_body"][()]] == 0
         return {name.removeprefix("heat_"): float(f[f"frames/{name}"][-1][grain].sum())
-                for name in HEAT_FIELDS if f"frames/{name}" in f}
+                for name in (f"heat_{m}" for m in MECHANISMS) if f"frames/{name}" in f}
 
 
 def level_row(row, result, heat, t_initial):
@@ -150,7 +150,7 @@ def _summary(row):
 
 def table_lines(rows, chg):
     """The study's table: one line per level, then the changes between levels."""
-    mechs = [m.removeprefix("heat_") for m in HEAT_FIELDS]
+    mechs = list(MECHANISMS)
     head = (f"{'level':>5} {'quads':>5} {'wall s':>7} {'mean K':>7} {'p99 K':>7} "
             f"{'p99.9 K':>8} {'peak K':>7} {'spots':>5} | heat [J/m]: "
             + " ".join(f"{m:>13}" for m in mechs))
@@ -177,7 +177,7 @@ def _pct(v):
 
 def csv_text(rows):
     """One CSV line per level."""
-    mechs = [m.removeprefix("heat_") for m in HEAT_FIELDS]
+    mechs = list(MECHANISMS)
     keys = [k for k, _ in COMPARED]
     lines = [",".join(["level", "rule", "quads_per_grain", "status", "wall_s", "steps", "time"]
                       + keys + ["n_spots"] + [f"heat_{m}" for m in mechs])]

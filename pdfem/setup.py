@@ -1,0 +1,139 @@
+"""Set-up: the bodies of a run's first state, from a scene (and its bed) or from a checkpoint.
+
+:func:`initial_bodies` meshes the grains a rank owns at t = 0 and every block, with the
+boundary conditions, the material state (a prepared bed's stresses) and the lumped mass;
+:func:`restart_bodies` reads a checkpoint's bodies and the cell owners of its grains. Both
+return the store before the first rebuild: the stepper migrates the grains to their owners
+and makes the ghosts (:meth:`pdfem.solver.Simulation.rebuild`).
+"""
+
+import tomllib
+
+import numpy as np
+
+from partition import partition
+from pdfem import build
+from pdfem.errors import InputError
+from pdfem.kernels.element_measures import q4_lumped_mass
+from pdfem.kernels.material import material_initial_state
+from pdfem.parallel.exchange import owned_grain_cells
+from pdfem.parallel.mpi import array_sum
+from pdfem.store import NODE, Batch, Field, Store
+
+# A restart's contact forces of the last step, carried with the nodes to their owners
+RESTART_FC = Field("restart_contact_force", NODE, (2,), np.float64)
+
+
+class Blocks:
+    """The scene's blocks (global bodies, stored first on every rank): names, node sets."""
+
+    def __init__(self, names, sets):
+        self.names, self.sets = names, sets
+
+    def __len__(self):
+        return len(self.names)
+
+
+def initial_bodies(sim, scene, init_state):
+    """(store, cell owners, :class:`Blocks`): the grains this rank owns at t = 0 (by the
+    partition of the grain centres' cells) and every block, meshed, with boundary conditions,
+    material state and lumped mass; ``init_state(sim, store)``, when given, edits them."""
+    comm, r = sim.comm, sim.resolved
+    g = scene.grains
+    ng = g["center"].shape[0]
+    cells = sim.grid.cell_of(g["center"])
+    weights = np.bincount(cells, minlength=sim.grid.ncell).astype(float)
+    owner = partition(r["domain"]["partition"], weights, sim.grid.nx, sim.grid.ny, comm.size)
+    mine = np.nonzero(owner[cells] == comm.rank)[0]
+    nst = sim.nst
+    grains = build.grain_batch(sim.fields, sim.nip, nst, r["element"]["level"],
+                               mine.astype(np.int64), g["center"][mine], g["axes"][mine],
+                               g["angle"][mine], g["velocity"][mine], g["material"][mine])
+    if "nodes" in g:
+        # A prepared bed: the grain meshes as the preparation left them
+        grains.a["x"] = g["nodes"][mine].reshape(-1, 2).copy()
+        grains.a["v"] = g["node_v"][mine].reshape(-1, 2).copy()
+    specs = r.get("blocks", [])
+    bbatch, bsets = build.block_batch(sim.fields, sim.nip, nst, specs, ng, sim.mat_ids)
+    blocks = Blocks([b["name"] for b in specs], bsets)
+    first = np.concatenate(([0], np.cumsum(bbatch.a["nn"])[:-1])).astype(np.int64)
+    build.apply_bcs(bbatch, r.get("bc", []), sim.box, blocks.names, bsets, first)
+    build.apply_bcs(grains, [b for b in r.get("bc", []) if "wall" in b], sim.box, [], [], [])
+    batch = Batch.concat(sim.fields, [bbatch, grains])
+    material_initial_state(batch.a["mst"], batch.a["emat"], sim.mat_params)
+    if "elem_sig" in g:
+        bed_stress(batch, g, mine, int(bbatch.a["ne"].sum()))
+    store = Store(sim.fields, batch, batch.nbody)
+    q4_lumped_mass(store.x, store.conn, store.emat, sim.mat_params, 0, store.ne_own, store.m)
+    if init_state is not None:
+        init_state(sim, store)
+    return store, owner, blocks
+
+
+def bed_stress(batch, g, mine, e0):
+    """Stresses and material state of a prepared bed's grains (elements after e0)."""
+    sig, mst = g["elem_sig"], g["elem_mst"]
+    nip, nst = batch.a["sig"].shape[1], batch.a["mst"].shape[2]
+    if sig.shape[2] != nip or mst.shape[3] != nst:
+        raise InputError(f"grains_file: the bed file holds {sig.shape[2]} integration "
+                         f"point(s) and {mst.shape[3]} state variable(s) per element; this "
+                         f"scene has {nip} and {nst} (element.rule and the material models "
+                         "must be the preparation's)")
+    batch.a["sig"][e0:] = sig[mine].reshape(-1, nip, 4)
+    batch.a["mst"][e0:] = mst[mine].reshape(-1, nip, nst)
+
+
+def restart_bodies(sim, path):
+    """(store, cell owners, checkpoint): every rank reads the global bodies and a block of
+    grains of the checkpoint at ``path`` (its scene must be this run's); the cell owners
+    partition the checkpoint's grains. The store carries the last step's contact forces
+    (field RESTART_FC) when the checkpoint has them, so that they ride with the nodes."""
+    from pdfem.io.checkpoint import read_checkpoint
+
+    ck = read_checkpoint(path, sim.fields, sim.comm)
+    same_scene(path, ck.scene_text, sim.scene.to_toml_string())
+    # Its energy series has this run's terms (the same scene has the same effects)
+    nterm = len(sim.terms)
+    if (ck.arrays["energy_ref"].shape != (nterm,)
+            or ck.arrays["energy_rows"].shape[1:] not in ((), (nterm + 3,))):
+        raise InputError(f"--restart: {path} holds an energy series of other terms than this "
+                         f"run's {nterm} ({', '.join(sim.terms)})")
+    fields = sim.fields + ([RESTART_FC] if ck.contact_force is not None else [])
+    if ck.contact_force is not None:
+        ck.batch.a[RESTART_FC.name] = ck.contact_force
+    store = Store(fields, Batch(fields, ck.batch.a), ck.batch.nbody)
+    # The partition of the checkpoint's grains: cell weights summed over the ranks
+    cells = owned_grain_cells(store, sim.grid, sim.nglobal)
+    weights = np.bincount(cells, minlength=sim.grid.ncell).astype(float)
+    array_sum(sim.comm, weights)
+    owner = partition(sim.resolved["domain"]["partition"], weights, sim.grid.nx, sim.grid.ny,
+                      sim.comm.size)
+    return store, owner, ck
+
+
+def drop_restart_forces(store, fields, ck):
+    """After the first rebuild of a restart: the owned nodes' contact forces kept on the
+    checkpoint (for the first frame), and the store without them."""
+    if ck.contact_force is None:
+        return store
+    ck.contact_force = getattr(store, RESTART_FC.name)[: store.nn_own].copy()
+    return Store(fields, Batch(fields, {f.name: getattr(store, f.name) for f in fields}),
+                 store.nb_own)
+
+
+def same_scene(path, saved, given):
+    """A restart must run the checkpoint's scene; only [output], [guards] and the time keys
+    end, safety, dt_min and max_steps may change."""
+    a, b = tomllib.loads(saved), tomllib.loads(given)
+    for d in (a, b):
+        d.pop("output", None)
+        d.pop("guards", None)
+        for key in ("end", "safety", "dt_min", "max_steps"):
+            d.get("time", {}).pop(key, None)
+    if a == b:
+        return
+    for key in sorted(set(a) | set(b)):
+        if a.get(key) != b.get(key):
+            raise InputError(f"--restart: {path} was written for a different scene ([{key}] "
+                             "differs; only [output], [guards], time.end, time.safety, "
+                             "time.dt_min and time.max_steps may change)")

@@ -101,7 +101,7 @@ def body_terms(sim):
     # The effects' terms (gravity potential, contact energy, heat, ...), each effect's added
     for eff in sim.effects:
         extra = {}
-        eff.energy_terms(sim, extra)
+        eff.energy_terms(sim.state, sim.ctx, extra)
         for name, vals in extra.items():
             if name not in col:
                 raise KeyError(f"effect {eff.name!r} gives the energy term {name!r}, which it "

@@ -15,6 +15,7 @@ import numpy as np
 
 from partition import CellGrid, needs_rebalance, partition
 from pdfem import build, setup
+from pdfem.context import Context
 from pdfem.drive import Drives
 from pdfem.effects import active_effects
 from pdfem.effects.base import hook_table
@@ -106,8 +107,10 @@ class Simulation:
                 store, self.halo = self.rebuild(store)
             store = setup.drop_restart_forces(store, self.fields, self.checkpoint)
         self.state = State(store, self.has_contact)
+        # What the effects' hooks read besides the state
+        self.ctx = Context(self)
         for eff in self.effects:
-            eff.setup(self)
+            eff.setup(self.state, self.ctx)
         # The effects that use each step hook, listed once
         self.hooks = hook_table(self.effects)
         self.minima = self.hooks["step_minimum"]
@@ -137,7 +140,7 @@ class Simulation:
         initial_strain_work(self)
         self.compute_forces()
         for eff in self.hooks["start_work"]:
-            eff.start_work(self)
+            eff.start_work(st, self.ctx)
         st.dt_prev = 0.0
         st.dt = self.next_dt()
         self.advance_velocities(first=True)
@@ -163,7 +166,7 @@ class Simulation:
             return
         contact = [e for e in self.effects if e.name == "contact"][0]
         saved = self.checkpoint.state.get("contact_cap") if restart is not None else None
-        self.contact_cap, line = contact_stiffness_cap(self, contact, saved)
+        self.contact_cap, line = contact_stiffness_cap(self.state, self.ctx, contact, saved)
         if line:
             self.guards.actions.append(line)
 
@@ -183,7 +186,7 @@ class Simulation:
         self.compute_forces()
         # 6. heat
         for eff in self.hooks["heat"]:
-            eff.heat(self)
+            eff.heat(st, self.ctx)
         # 7. next dt, velocities, diagnostics
         st.dt_prev = st.dt
         st.dt = self.next_dt()
@@ -199,7 +202,7 @@ class Simulation:
                 store, self.halo = self.rebuild(st.store)
             st.new_store(store)
             for eff in self.effects:
-                eff.after_rebuild(self)
+                eff.after_rebuild(st, self.ctx)
         else:
             with self.timers.phase("halo"):
                 self.halo.refresh([getattr(st.store, n) for n in self.halo_fields])
@@ -219,7 +222,7 @@ class Simulation:
         self._fail_msg = ""
         self.stop_requested = False
         for eff in self.effects:
-            eff.after_rebuild(self)
+            eff.after_rebuild(st, self.ctx)
         self.refresh_reductions()
 
     def halve_step(self):
@@ -272,7 +275,7 @@ class Simulation:
         s = st.store
         st.f[:] = 0.0
         for eff in self.hooks["before_elements"]:
-            eff.before_elements(self)
+            eff.before_elements(st, self.ctx)
         with self.timers.phase("elements"):
             bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
                                       s.mst, s.hgq, self.hg_coef, 0, s.ne_own, self.f, s.ewint,
@@ -283,10 +286,10 @@ class Simulation:
             # The contacts' forces go to fc (their work is accounted per body), then to f
             st.fc[:] = 0.0
             for eff in self.hooks["contact_forces"]:
-                eff.contact_forces(self)
+                eff.contact_forces(st, self.ctx)
             st.f += st.fc
         for eff in self.hooks["body_force"]:
-            eff.body_force(self)
+            eff.body_force(st, self.ctx)
         self._check_finite()
 
     def _element_failure(self, e):
@@ -318,12 +321,12 @@ class Simulation:
         dt_loc = q4_stable_dt(s.x, s.conn, s.emat, self.mat_params, 0, s.ne_own)
         limiter = "the element wave speed"
         for eff in self.hooks["stable_dt"]:
-            d = eff.stable_dt(self)
+            d = eff.stable_dt(self.state, self.ctx)
             if d < dt_loc:
                 dt_loc, limiter = d, eff
         if not dt_loc > self.dt_min and not self._fail_msg:
             if not isinstance(limiter, str):
-                limiter = limiter.dt_limiter(self, dt_loc)
+                limiter = limiter.dt_limiter(self.state, self.ctx, dt_loc)
             self.fail(f"check time step: the stable dt {dt_loc:.3e} s (limited by {limiter}) is "
                       f"below time.dt_min {self.dt_min:.3e} s")
         # Whether the next step's position update may move a grain node half the skin: the
@@ -334,11 +337,11 @@ class Simulation:
         # minima
         red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0, self.local_stop,
                         self.local_ckpt, float(ahead)]
-                       + [-e.step_minimum(self) for e in self.minima])
+                       + [-e.step_minimum(self.state, self.ctx) for e in self.minima])
         red = array_max(self.comm, red)
         self.rebuild_next = bool(red[4] > 0)
         for e, value in zip(self.minima, red[5:], strict=True):
-            e.set_step_minimum(self, -value)
+            e.set_step_minimum(self.state, self.ctx, -value)
         self.stop_requested = self.stop_requested or red[2] > 0
         self.checkpoint_requested = self.checkpoint_requested or red[3] > 0
         self.local_ckpt = 0.0
@@ -362,7 +365,8 @@ class Simulation:
         step's, dt the next step's), each with a reduction of its own (collective)."""
         self.rebuild_next = global_any(self.comm, self._moves_half_skin(self.dt, 0.0))
         for e in self.minima:
-            e.set_step_minimum(self, global_min(self.comm, e.step_minimum(self)))
+            e.set_step_minimum(self.state, self.ctx,
+                               global_min(self.comm, e.step_minimum(self.state, self.ctx)))
 
     def fail(self, msg):
         """Record a failed check; all ranks stop together at the end of the step."""

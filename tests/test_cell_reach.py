@@ -30,9 +30,10 @@ def _stretched_pair(tmp_path):
 def test_grains_wider_than_the_cells_stay_candidates(tmp_path):
     sim = _stretched_pair(tmp_path)
     assert sim.reach == 1
-    sim.store, sim.halo = sim.rebuild(sim.store)
+    store, sim.halo = sim.rebuild(sim.store)
+    sim.state.new_store(store)
     contact = next(e for e in sim.effects if e.name == "contact")
-    contact.after_rebuild(sim)
+    contact.after_rebuild(sim.state, sim.ctx)
     g0 = sim.nglobal
     # The centroids are two cells apart: the 3x3 block would not see the pair
     assert sim.reach == 2

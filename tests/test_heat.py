@@ -174,12 +174,12 @@ def test_a_heat_source_that_no_mechanics_pays_for_trips_the_energy_guard(tmp_pat
     plain = type(heat).heat
     last = s.ewp.copy()
 
-    def heat_twice(self, sim):
+    def heat_twice(self, st, ctx):
         # beta x the step's plastic work once more, on the element's nodes and in the books
         extra_heat = 0.8 * (s.ewp - last)
         last[:] = s.ewp
         element_to_nodes(s.x, s.conn, 0, s.ne_own, extra_heat, self.src)
-        plain(self, sim)
+        plain(self, st, ctx)
 
     heat.heat = heat_twice.__get__(heat)
     with pytest.raises(SimulationError, match="check energy drift"):

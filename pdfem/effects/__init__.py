@@ -40,9 +40,9 @@ class CapPlasticity(Effect):
     def present(resolved):
         return any(m.get("model") == "cap" for m in resolved["materials"].values())
 
-    def frame_values(self, sim, name, nodes, elems):
+    def frame_values(self, st, ctx, name, nodes, elems):
         """kappa and the plastic strains (xx, yy, xy, zz), element means."""
-        mst = sim.store.mst
+        mst = st.store.mst
         if name == "kappa":
             return mst[elems, :, 0].mean(axis=1)
         return mst[elems, :, 2:6].mean(axis=1)

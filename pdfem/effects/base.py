@@ -9,6 +9,13 @@ ghosts and contact candidates were rebuilt, ``before_elements`` ahead of the int
 terms of the balance. The solver lists once, at set-up, the effects that override each step
 hook (:func:`hook_table`, like LAMMPS's ``setmask``), so a hook no effect uses costs nothing.
 A disabled effect is never constructed, so it allocates nothing and runs no kernel.
+
+Every hook receives the state it works on, ``st`` (:class:`pdfem.state.State`: the store of
+bodies, t, dt, the per-step arrays f, fc, du, kin), and the run's context, ``ctx``
+(:class:`pdfem.context.Context`: communicator, timers, material table, cell grid, blocks,
+the heat handle, ``fail``). A hook adds into the arrays its step point is for (forces into
+st.f or st.fc, heat through the heat handle) and writes its own attributes and store fields;
+it never assigns the state's time or arrays, and never writes another effect's attributes.
 """
 
 import numpy as np
@@ -54,37 +61,37 @@ class Effect:
         table is there; effects that live in other tables override it."""
         return cls.name in resolved
 
-    def setup(self, sim):
+    def setup(self, st, ctx):
         """Called once after the initial store exists."""
 
-    def after_rebuild(self, sim):
+    def after_rebuild(self, st, ctx):
         """Called after migration and the rebuild of ghosts (the store is new)."""
 
-    def before_elements(self, sim):
+    def before_elements(self, st, ctx):
         """Called ahead of the internal forces of each step."""
 
-    def body_force(self, sim):
-        """Add forces into sim.f for owned nodes."""
+    def body_force(self, st, ctx):
+        """Add forces into st.f for owned nodes."""
 
-    def heat(self, sim):
-        """Step 6 of the loop: advance the temperatures over sim.dt."""
+    def heat(self, st, ctx):
+        """Step 6 of the loop: advance the temperatures over st.dt."""
 
-    def start_work(self, sim):
+    def start_work(self, st, ctx):
         """At t = 0 of a new run (not a restart), after the first forces."""
 
-    def contact_forces(self, sim):
-        """Add the contacts' forces into sim.fc for owned nodes."""
+    def contact_forces(self, st, ctx):
+        """Add the contacts' forces into st.fc for owned nodes."""
 
-    def stable_dt(self, sim):
+    def stable_dt(self, st, ctx):
         """This rank's limit on the next time step [s] (np.inf: none)."""
         return np.inf
 
-    def dt_limiter(self, sim, dt):
+    def dt_limiter(self, st, ctx, dt):
         """Words naming what limits this effect's stable step to dt (for the time.dt_min
         error)."""
         return self.name
 
-    def step_minimum(self, sim):
+    def step_minimum(self, st, ctx):
         """A local quantity this effect needs as its minimum over every rank at the next step
         (np.inf: none). It travels in the time step's reduction at the end of each step
         (:meth:`pdfem.solver.Simulation.next_dt`), so it costs no collective of its own;
@@ -92,14 +99,14 @@ class Effect:
         listed once at set-up."""
         return np.inf
 
-    def set_step_minimum(self, sim, value):
+    def set_step_minimum(self, st, ctx, value):
         """Receive the global minimum of :meth:`step_minimum`."""
 
-    def frame_values(self, sim, name, nodes, elems):
+    def frame_values(self, st, ctx, name, nodes, elems):
         """The rows of its frame field ``name`` for the given local nodes or elements."""
         raise NotImplementedError(f"effect {self.name!r} declares no frame field {name!r}")
 
-    def energy_terms(self, sim, out):
+    def energy_terms(self, st, ctx, out):
         """Its per-body energy terms (declared in ``energy``): out maps term name ->
         (nb_own,) array; a declared term left out is zero."""
 

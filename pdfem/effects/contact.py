@@ -50,7 +50,7 @@ from pdfem.kernels.heat import (
     accumulate_element_heat_sorted,
     contact_heat,
 )
-from pdfem.kernels.integrate import ACC_CDAMP, ACC_CWORK, ACC_FRIC
+from pdfem.kernels.integrate import ACC_CWORK
 from pdfem.kernels.neighbours import (
     body_boxes,
     grain_pairs,
@@ -58,6 +58,7 @@ from pdfem.kernels.neighbours import (
     pack_keys,
 )
 from pdfem.parallel.mpi import allgather_rows
+from pdfem.store import BODY, Field
 
 # Beyond RCAP * delta_max the hardening law continues along its tangent (see contact_law)
 RCAP = 0.95
@@ -73,6 +74,11 @@ NO_ROWS = np.zeros(0, np.int64)
 NO_HISTORY = np.zeros(0)
 # No force array: the pass leaves the forces to _apply (blocks' rows are gathered first)
 NO_FORCES = np.zeros((0, 2))
+# Columns of the contacts' per-body accumulator (store field contact_acc): the energy
+# dissipated by friction and by the normal damping of the contacts the body is side A of [J/m]
+CACC_FRIC = 0
+CACC_DAMP = 1
+CONTACT_ACC = Field("contact_acc", BODY, (2,), np.float64)
 # Outward normals of the domain walls (pointing into the domain) and their box coordinate
 WALL_SIDES = {"left": ((1.0, 0.0), 0), "bottom": ((0.0, 1.0), 1), "right": ((-1.0, 0.0), 2),
               "top": ((0.0, -1.0), 3)}
@@ -123,6 +129,7 @@ class Contact(Effect):
     energy = (("contact", 1), ("friction", 1), ("contact_damping", 1), ("contact_loss", 0))
     # The contacts' nodal forces per frame; every contact of a frame's step (pdfem.io.contacts)
     frame_fields = {"contact_force": ("node", (2,))}
+    extra_fields = (CONTACT_ACC,)
     outputs = ("contacts",)
     needs = "the [contact] table"
 
@@ -180,35 +187,35 @@ class Contact(Effect):
         self.stored = np.zeros(0)
         self._q = None
 
-    def setup(self, sim):
-        self.after_rebuild(sim)
+    def setup(self, st, ctx):
+        self.after_rebuild(st, ctx)
 
     # ------------------------------------------------------------------ detection
-    def after_rebuild(self, sim):
+    def after_rebuild(self, st, ctx):
         """Candidate grain pairs from the cell grid (first level of detection), then their
         element pairs and the owned grain elements near a wall, sorted by key (second)."""
-        s, g0 = sim.store, sim.nglobal
+        s, g0 = st.store, ctx.nglobal
         n = s.nbody - g0
         cent = np.empty((n, 2))
         body_centroids(s.x, s.nstart, s.nn, g0, s.nbody, cent)
-        cells = sim.grid.cell_of(cent) if n else np.zeros(0, np.int64)
+        cells = ctx.grid.cell_of(cent) if n else np.zeros(0, np.int64)
         bbox = np.empty((s.nelem, 4))
         element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
         boxes = np.empty((s.nbody, 4))
         body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
         owned = (np.arange(g0, s.nbody) < s.nb_own).astype(np.int8)
-        pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], sim.grid.nx, sim.grid.ny,
-                            sim.skin, sim.reach)
+        pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], ctx.grid.nx, ctx.grid.ny,
+                            ctx.skin, ctx.reach)
         self.gpairs = pairs + g0
-        reach = sim.skin * (1.0 + REACH_SLACK)
-        epairs = self._element_pairs(sim, bbox, self.gpairs, reach)
-        welems, wids = self._wall_elements(sim, bbox, _block_elements(s, g0), s.ne_own, reach)
+        reach = ctx.skin * (1.0 + REACH_SLACK)
+        epairs = self._element_pairs(st, ctx, bbox, self.gpairs, reach)
+        welems, wids = self._wall_elements(st, ctx, bbox, _block_elements(s, g0), s.ne_own, reach)
         self.cand = _sorted_candidates(s, epairs, welems, wids)
 
-    def _block_pairs(self, sim, boxes):
+    def _block_pairs(self, st, ctx, boxes):
         """Owned grains near each block, and the block pairs (blocks move freely: every
         step)."""
-        s, g0 = sim.store, sim.nglobal
+        s, g0 = st.store, ctx.nglobal
         parts = [np.zeros((0, 2), np.int64)]
         own = np.arange(g0, s.nb_own)
         for g in range(g0):
@@ -220,9 +227,9 @@ class Contact(Effect):
                 parts.append(np.array([[g, h]], np.int64))
         return np.concatenate(parts).astype(np.int64)
 
-    def _element_pairs(self, sim, bbox, bpairs, reach):
+    def _element_pairs(self, st, ctx, bbox, bpairs, reach):
         """Boundary-element pairs of the candidate bodies whose boxes are within reach."""
-        s = sim.store
+        s = st.store
         e0, e1 = s.estart, s.estart + s.ne
         while True:
             n = candidate_pairs(bbox, s.ebnd, s.elem_gid, s.elem_loc, e0, e1, bpairs, reach,
@@ -231,10 +238,10 @@ class Contact(Effect):
                 return self._out[:n].copy()
             self._out = np.zeros((2 * n, 2), np.int64)
 
-    def _wall_elements(self, sim, bbox, e0, e1, reach):
+    def _wall_elements(self, st, ctx, bbox, e0, e1, reach):
         """(elements, wall index) of the boundary elements of [e0, e1) within reach of a
         wall's half-plane."""
-        s = sim.store
+        s = st.store
         if not self.walls:
             return np.zeros(0, np.int64), np.zeros(0, np.int64)
         while True:
@@ -244,30 +251,30 @@ class Contact(Effect):
                 return self._wall_out[0, :m].copy(), self._wall_out[1, :m].copy()
             self._wall_out = np.zeros((2, 2 * m), np.int64)
 
-    def _step_candidates(self, sim):
+    def _step_candidates(self, st, ctx):
         """This step's candidates: those of the last rebuild, merged in key order with the
         blocks' (element pairs and walls whose boxes overlap now)."""
-        s, g0 = sim.store, sim.nglobal
+        s, g0 = st.store, ctx.nglobal
         if g0 == 0:
             return self.cand
         bbox = np.empty((s.nelem, 4))
         element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
         boxes = np.empty((s.nbody, 4))
         body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
-        pairs = self._element_pairs(sim, bbox, self._block_pairs(sim, boxes), 0.0)
-        welems, wids = self._wall_elements(sim, bbox, 0, _block_elements(s, g0), 0.0)
+        pairs = self._element_pairs(st, ctx, bbox, self._block_pairs(st, ctx, boxes), 0.0)
+        welems, wids = self._wall_elements(st, ctx, bbox, 0, _block_elements(s, g0), 0.0)
         blocks = _sorted_candidates(s, pairs, welems, wids)
         cand = np.empty((self.cand.shape[0] + blocks.shape[0], 2), np.int64)
         merge_candidates(self.cand, blocks, s.elem_gid, s.elem_loc, cand)
         return cand
 
     # ------------------------------------------------------------------ forces
-    def contact_forces(self, sim):
+    def contact_forces(self, st, ctx):
         """Evaluate every contact this rank needs and add the forces in key order."""
-        with sim.timers.phase("contact_detection"):
-            cand = self._step_candidates(sim)
-        with sim.timers.phase("contact_forces"):
-            self._evaluate(sim, cand)
+        with ctx.timers.phase("contact_detection"):
+            cand = self._step_candidates(st, ctx)
+        with ctx.timers.phase("contact_forces"):
+            self._evaluate(st, ctx, cand)
 
     def _outputs(self, rows):
         """Output arrays of the contact pass with room for rows contacts (kept between steps:
@@ -286,16 +293,16 @@ class Contact(Effect):
             self._boxes = np.empty((n, 4))
         return self._boxes
 
-    def _evaluate(self, sim, cand):
-        s = sim.store
-        dt = sim.dt
+    def _evaluate(self, st, ctx, cand):
+        s = st.store
+        dt = st.dt
         # Without blocks every contact is local and in key order: the pass adds the forces (all
         # of them, also those whose rows did not fit: a second call only writes the rows)
-        added = sim.nglobal == 0
-        forces = sim.fc if added else NO_FORCES
+        added = ctx.nglobal == 0
+        forces = st.fc if added else NO_FORCES
         while True:
             out = self._outputs(self._rows)
-            n, _, nev = contact_pass(s.x, sim.du, s.m, s.conn, s.ebnd, s.elem_gid, s.elem_loc,
+            n, _, nev = contact_pass(s.x, st.du, s.m, s.conn, s.ebnd, s.elem_gid, s.elem_loc,
                                        s.elen, s.emat, self.law.reshape(-1, L.NPAR),
                                        self.law.shape[0], NO_ROWS, self._wall_p0, self._wall_n,
                                        self._wall_mu, cand, s.hkey, s.hval, NO_HISTORY, False,
@@ -306,14 +313,14 @@ class Contact(Effect):
             self._outputs(n + n // 4 + 64)
             forces = NO_FORCES
         active, keys, elems, nodes, weights, fnod, us_out, res = (o[:n] for o in out)
-        self._check(sim, keys, active, res)
-        self._apply(sim, keys, active, nodes, weights, fnod, res, elems, not added)
-        self._bookkeeping(sim, keys, active, us_out, res, elems)
+        self._check(st, ctx, keys, active, res)
+        self._apply(st, ctx, keys, active, nodes, weights, fnod, res, elems, not added)
+        self._bookkeeping(st, ctx, keys, active, us_out, res, elems)
         self.last = {"active": active, "nodes": nodes, "res": res, "fnod": fnod, "keys": keys,
                       "candidates": cand.shape[0], "evaluated": nev, "elems": elems, "dt": dt,
                       "q": self._q}
 
-    def _check(self, sim, keys, active, res):
+    def _check(self, st, ctx, keys, active, res):
         """Guards: a degenerate overlap, or a mean overlap delta = area / L (the law's) beyond
         delta_max; the first in key order is named."""
         p = first_guarded(active, res, self.delta_max)
@@ -322,27 +329,27 @@ class Contact(Effect):
             what = (f"deeper than contact.delta_max (delta = {res[p, R_DELTA]:.3e} m)"
                     if active[p] == C_ACTIVE else "degenerate (one element inside the other)")
             other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
-            sim.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
+            ctx.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
                      f"and {other} is {what}")
 
-    def _apply(self, sim, keys, active, nodes, weights, fnod, res, elems, forces):
+    def _apply(self, st, ctx, keys, active, nodes, weights, fnod, res, elems, forces):
         """Add forces (unless the pass did: forces False) and contact heat to owned nodes in
         key order (the rows' order); block-side rows are gathered from all ranks."""
-        s = sim.store
-        # Heat of each contact on its two sides (this step, over sim.dt), its friction part,
+        s = st.store
+        # Heat of each contact on its two sides (this step, over st.dt), its friction part,
         # and the elements of the two sides (-1: a wall)
-        heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and sim.dt > 0.0
+        heat = (self.heat_h > 0.0 or self.heat_fraction > 0.0) and st.dt > 0.0
         q = None
         if heat:
             q = np.zeros((active.shape[0], 4))
             contact_heat(active, nodes, weights, res, s.T, self.heat_h, self.heat_fraction,
-                         sim.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1], q[:, 2], q[:, 3])
+                         st.dt, R_WIDTH, R_DISS, q[:, 0], q[:, 1], q[:, 2], q[:, 3])
         # Kept for the per-contact output (pdfem.io.contacts)
         self._q = q
         order = np.arange(active.shape[0])
         # No blocks: every contact is local, already in key order
-        if sim.nglobal == 0:
-            self._add(sim, order, active, nodes, weights, fnod, q, elems, forces)
+        if ctx.nglobal == 0:
+            self._add(st, ctx, order, active, nodes, weights, fnod, q, elems, forces)
             return
         isg = s.isglobal[s.elem_body]
         mixed = (elems[:, 1] >= 0) & (isg[elems[:, 0]] != isg[elems[:, 1]])
@@ -359,9 +366,9 @@ class Contact(Effect):
                                fnod[sel].reshape(-1, 2 * NNOD), qsel], axis=1)
         # Columns: keys 0:4, nodes 4:12 (the grain side's cleared), weights, forces, heat
         rows[:, 4:4 + NNOD // 2] = -1
-        got = allgather_rows(sim.comm, rows) if sim.comm.size > 1 else rows
+        got = allgather_rows(ctx.comm, rows) if ctx.comm.size > 1 else rows
         if got.shape[0] == 0:
-            self._add(sim, order, active, local_nodes, weights, fnod, q, elems)
+            self._add(st, ctx, order, active, local_nodes, weights, fnod, q, elems)
             return
         c_w, c_f, c_q = 4 + NNOD, 4 + 2 * NNOD, 4 + 4 * NNOD
         gkeys = got[:, 0:4].astype(np.int64)
@@ -374,43 +381,43 @@ class Contact(Effect):
         if heat:
             q_all = np.concatenate([q, got[:, c_q:c_q + 4]])
             # The block side's element of a gathered row: its body (by gid) and element
-            g0 = sim.nglobal
+            g0 = ctx.nglobal
             blk = np.searchsorted(s.gid[:g0], gkeys[:, 2])
             gel = np.stack([np.full(got.shape[0], -1), s.estart[blk] + gkeys[:, 3]], axis=1)
             e_all = np.concatenate([elems, gel]).astype(np.int64)
-        self._add(sim, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all, e_all)
+        self._add(st, ctx, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all, e_all)
 
-    def _add(self, sim, order, active, nodes, weights, fnod, q, elems, forces=True):
+    def _add(self, st, ctx, order, active, nodes, weights, fnod, q, elems, forces=True):
         """Forces (with forces) and heat (q not None) of the contacts in the given order to
         owned nodes, and the heat to the owned elements of the two sides (elems) by
         mechanism."""
-        s = sim.store
+        s = st.store
         if forces:
-            accumulate_sorted(order, active, nodes, fnod, s.nn_own, sim.fc)
+            accumulate_sorted(order, active, nodes, fnod, s.nn_own, st.fc)
         if q is not None:
-            sim.heat.add_contact_heat(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own)
+            ctx.heat.add_contact_heat(order, active, nodes, weights, q[:, 0], q[:, 1], s.nn_own)
             accumulate_element_heat_sorted(order, active, elems, q[:, 0], q[:, 1], q[:, 2],
                                            q[:, 3], s.ne_own, s.eheat)
 
-    def _bookkeeping(self, sim, keys, active, us_out, res, elems):
+    def _bookkeeping(self, st, ctx, keys, active, us_out, res, elems):
         """New history table; contact energy and friction per body of side A (counted once)."""
-        s = sim.store
+        s = st.store
         self.stored = np.zeros(s.nbody)
         fric, damp = np.zeros(s.nbody), np.zeros(s.nbody)
         s.hkey, s.hval = contact_bookkeeping(active, keys, us_out, res, elems, s.elem_body,
-                                             s.isglobal, s.nb_own, sim.comm.rank == 0,
+                                             s.isglobal, s.nb_own, ctx.comm.rank == 0,
                                              self.stored, fric, damp)
         if self.friction:
-            s.acc[:, ACC_FRIC] += fric
+            s.contact_acc[:, CACC_FRIC] += fric
         if self.zeta_max > 0.0:
-            s.acc[:, ACC_CDAMP] += damp
+            s.contact_acc[:, CACC_DAMP] += damp
 
     # ------------------------------------------------------------------ step size, energy
-    def stable_dt(self, sim):
+    def stable_dt(self, st, ctx):
         """Smallest stable step of: any contact that may begin (initial stiffness over a whole
         boundary edge), the active contacts (their stiffness hardens), and the step in which
         the fastest approach closes APPROACH x delta_max."""
-        s = sim.store
+        s = st.store
         vmax = max_speed(s.v, 0, s.nn_own)
         dt = APPROACH * self.delta_min / (2.0 * vmax) if vmax > 0.0 else np.inf
         dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.elen, s.m, 0, s.ne_own, self.kn0_max,
@@ -420,10 +427,10 @@ class Contact(Effect):
         last = self.last
         return min(dt, contact_dt_min(last["active"], last["res"], self.zeta_max))
 
-    def dt_limiter(self, sim, dt):
+    def dt_limiter(self, st, ctx, dt):
         """Words naming what limits the step to dt (for the time.dt_min error): the contact
         or boundary element whose limit it is, with body and element ids."""
-        s = sim.store
+        s = st.store
         if self.last is not None:
             last = self.last
             for p in np.nonzero(last["active"] == C_ACTIVE)[0]:
@@ -440,26 +447,26 @@ class Contact(Effect):
                         f"{s.elem_loc[e]}")
         return "the approach speed of the contacts (delta_max / speed)"
 
-    def start_work(self, sim):
+    def start_work(self, st, ctx):
         """At t = 0: the contact work accumulators start at minus the stored energy, so that
         the absorbed energy (energy.py, contact_loss) counts from the initial state."""
-        sim.store.acc[:, ACC_CWORK] -= self.stored
+        st.store.acc[:, ACC_CWORK] -= self.stored
 
-    def frame_values(self, sim, name, nodes, elems):
+    def frame_values(self, st, ctx, name, nodes, elems):
         """contact_force: the contacts' share of the nodal forces."""
-        return sim.fc[nodes]
+        return st.fc[nodes]
 
-    def energy_terms(self, sim, out):
-        s = sim.store
+    def energy_terms(self, st, ctx, out):
+        s = st.store
         nb = s.nb_own
         stored = self.stored[:nb] if self.stored.shape[0] >= nb else np.zeros(nb)
         out["contact"] = stored
-        out["friction"] = s.acc[:nb, ACC_FRIC]
-        out["contact_damping"] = s.acc[:nb, ACC_CDAMP]
+        fric, damp = s.contact_acc[:nb, CACC_FRIC], s.contact_acc[:nb, CACC_DAMP]
+        out["friction"] = fric
+        out["contact_damping"] = damp
         # What the contacts absorbed beyond their stored energy and friction: the work done
         # on them (minus the work their forces did on the bodies) less those two
-        out["contact_loss"] = (-s.acc[:nb, ACC_CWORK] - stored - s.acc[:nb, ACC_FRIC]
-                               - s.acc[:nb, ACC_CDAMP])
+        out["contact_loss"] = -s.acc[:nb, ACC_CWORK] - stored - fric - damp
 
 
 def check_contact_scene(resolved):

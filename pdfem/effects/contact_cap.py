@@ -17,16 +17,16 @@ from pdfem.kernels.stable import q4_stable_dt
 from pdfem.parallel.mpi import global_min
 
 
-def contact_stiffness_cap(sim, contact, kcap=None):
+def contact_stiffness_cap(st, ctx, contact, kcap=None):
     """The ``cap_contact = "element"`` remedy: lower kn0 and the hardening of every contact law
     so that a contact over a whole boundary edge of the initial meshes is no stiffer than the
     elements' initial stable step allows (contact_law.contact_dt >= that step). Returns
     (cap, log line or None when no law needed it); the same on every rank (global minima).
     A restart passes the cap its run started with (kcap) so that it continues bit-identically."""
-    s, n = sim.store, sim.store.ne_own
+    s, n = st.store, st.store.ne_own
     if kcap is not None:
         return kcap, _apply_cap(contact, kcap, None)
-    dt_el = global_min(sim.comm, q4_stable_dt(s.x, s.conn, s.emat, sim.mat_params, 0, n))
+    dt_el = global_min(ctx.comm, q4_stable_dt(s.x, s.conn, s.emat, ctx.mat_params, 0, n))
     # Stiffness limit of each boundary edge: contact_dt(m, rigid, k L) >= dt_el
     kcap = math.inf
     for k in range(4):
@@ -36,7 +36,7 @@ def contact_stiffness_cap(sim, contact, kcap=None):
             le = np.hypot(s.x[b, 0] - s.x[a, 0], s.x[b, 1] - s.x[a, 1])
             m = np.minimum(s.m[a], s.m[b])
             kcap = min(kcap, float(((2.0 * DT_FACTOR) ** 2 * m / (dt_el * dt_el * le)).min()))
-    kcap = global_min(sim.comm, kcap)
+    kcap = global_min(ctx.comm, kcap)
     if not math.isfinite(kcap):
         return None, None
     return kcap, _apply_cap(contact, kcap, dt_el)

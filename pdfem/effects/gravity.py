@@ -16,12 +16,12 @@ class Gravity(Effect):
         super().__init__(table, scene)
         self.g = np.asarray(table["g"], float)
 
-    def body_force(self, sim):
-        s = sim.store
-        add_gravity(sim.f, s.m, self.g[0], self.g[1], s.nn_own)
+    def body_force(self, st, ctx):
+        s = st.store
+        add_gravity(st.f, s.m, self.g[0], self.g[1], s.nn_own)
 
-    def energy_terms(self, sim, out):
-        s = sim.store
+    def energy_terms(self, st, ctx, out):
+        s = st.store
         pe = np.empty(s.nb_own)
         potential_energy(s.x, s.m, self.g[0], self.g[1], s.node_body, s.nn_own, pe)
         out["potential"] = pe

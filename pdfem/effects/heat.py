@@ -39,6 +39,7 @@ import math
 import numpy as np
 
 from pdfem.effects.base import Effect
+from pdfem.effects.contact import CACC_FRIC
 from pdfem.effects.thermal import fill_column
 from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.heat import (
@@ -59,7 +60,7 @@ from pdfem.kernels.heat import (
     kirchhoff_pressure,
     thermal_energy,
 )
-from pdfem.kernels.integrate import ACC_FRIC, body_sums
+from pdfem.kernels.integrate import body_sums
 from pdfem.kernels.params import ALPHA, COND, CP, RHO, T_REF
 from pdfem.store import BODY, ELEM, NODE, Field
 
@@ -133,52 +134,52 @@ class Heat(Effect):
         # Global conduction stable step of the last step's end (set with the time step)
         self.cond_dt = np.inf
 
-    def setup(self, sim):
-        s = sim.store
-        fill_column(sim, CP, "specific_heat")
+    def setup(self, st, ctx):
+        s = st.store
+        fill_column(st, ctx, CP, "specific_heat")
         if self.conduction:
-            fill_column(sim, COND, "conductivity")
+            fill_column(st, ctx, COND, "conductivity")
         if self.thermoelastic:
-            fill_column(sim, ALPHA, "expansion")
-        sim.mat_params[:, T_REF] = self.t_init
-        if not sim.restarted:
+            fill_column(st, ctx, ALPHA, "expansion")
+        ctx.mat_params[:, T_REF] = self.t_init
+        if not ctx.restarted:
             # Initial temperatures; lumped capacity: the lumped mass with rho c in place of rho
             s.T[:] = self.t_init
             if self.couple_elements:
                 s.tprev[:] = self.t_init
-            cap_table = sim.mat_params.copy()
-            cap_table[:, RHO] = sim.mat_params[:, RHO] * sim.mat_params[:, CP]
+            cap_table = ctx.mat_params.copy()
+            cap_table[:, RHO] = ctx.mat_params[:, RHO] * ctx.mat_params[:, CP]
             q4_lumped_mass(s.x, s.conn, s.emat, cap_table, 0, s.nelem, s.tcap)
             if self.couple_elements:
                 kirchhoff_pressure(s.x, s.conn, s.sig, 0, s.nelem, s.tau_prev)
-        self._hold_blocks(sim)
+        self._hold_blocks(st, ctx)
         self.src = np.zeros(s.nnode)
         self.q = np.zeros(s.nnode)
         self.eh = np.zeros(s.nelem)
 
-    def _hold_blocks(self, sim):
+    def _hold_blocks(self, st, ctx):
         """Fixed temperatures of [[thermal_bc]] on block node sets (global bodies)."""
-        s = sim.store
-        for bc in sim.resolved.get("thermal_bc", []):
-            i = sim.block_names.index(bc["body"])
-            nodes = sim.block_sets[i][bc["nodes"]] + s.nstart[i]
+        s = st.store
+        for bc in ctx.resolved.get("thermal_bc", []):
+            i = ctx.block_names.index(bc["body"])
+            nodes = ctx.block_sets[i][bc["nodes"]] + s.nstart[i]
             s.tfix[nodes] = 1
             s.tfixv[nodes] = bc["temperature"]
 
-    def after_rebuild(self, sim):
+    def after_rebuild(self, st, ctx):
         """Scratch arrays follow the new store size (the fields themselves migrate)."""
-        s = sim.store
+        s = st.store
         self.src = np.zeros(s.nnode)
         self.q = np.zeros(s.nnode)
         self.eh = np.zeros(s.nelem)
 
     # ------------------------------------------------------------------ hooks of the step
-    def before_elements(self, sim):
+    def before_elements(self, st, ctx):
         """Element temperatures and their increments since the last element update."""
         if not self.couple_elements:
             return
-        s = sim.store
-        with sim.timers.phase("heat"):
+        s = st.store
+        with ctx.timers.phase("heat"):
             element_thermal_state(s.T, s.tprev, s.conn, 0, s.ne_own, s.eth)
             s.tprev[: s.nn_own] = s.T[: s.nn_own]
 
@@ -188,69 +189,69 @@ class Heat(Effect):
         way into this effect's sources."""
         accumulate_heat_sorted(order, active, nodes, weights, qa, qb, n_owned, self.src)
 
-    def heat(self, sim):
+    def heat(self, st, ctx):
         """Sources of this step onto the nodes, then the (sub-cycled) temperature update."""
-        s = sim.store
-        dt = sim.dt
-        with sim.timers.phase("heat"):
+        s = st.store
+        dt = st.dt
+        with ctx.timers.phase("heat"):
             # Element sources: dissipation, viscous heating, thermo-elastic coupling
             if self.beta > 0.0 or self.gamma > 0.0 or self.thermoelastic:
                 none = np.empty(0)
                 tau_prev = s.tau_prev if self.thermoelastic else none
                 ewq, ewq_prev = (s.ewq, s.ewq_prev) if self.gamma > 0.0 else (none, none)
-                element_heat(s.x, s.T, s.conn, s.emat, sim.mat_params, s.sig, s.ewp,
+                element_heat(s.x, s.T, s.conn, s.emat, ctx.mat_params, s.sig, s.ewp,
                              s.ewp_prev, ewq, ewq_prev, tau_prev, self.beta, self.gamma,
                              self.thermoelastic, 0, s.ne_own, self.eh, s.eheat)
                 element_to_nodes(s.x, s.conn, 0, s.ne_own, self.eh, self.src)
             _body_node_sums(self.src, s.node_body, s.nn_own, s.hacc[:, HACC_SRC])
             # Conduction sub-steps (the sources enter with the first)
-            nsub = self._substeps(sim, dt) if self.conduction else 1
+            nsub = self._substeps(st, ctx, dt) if self.conduction else 1
             h = dt / nsub
             for _ in range(nsub):
                 if self.conduction:
-                    bad = conduction_flows(s.x, s.T, s.conn, s.emat, sim.mat_params, 0,
+                    bad = conduction_flows(s.x, s.T, s.conn, s.emat, ctx.mat_params, 0,
                                            s.ne_own, self.q)
                     if bad >= 0:
-                        sim.fail(f"check inverted element: element {s.elem_loc[bad]} of "
+                        ctx.fail(f"check inverted element: element {s.elem_loc[bad]} of "
                                  f"body {s.elem_gid[bad]} is inverted (heat conduction)")
                 advance_temperature(s.T, self.q, self.src, s.tcap, h, s.nn_own)
                 hold_temperature(s.T, s.tcap, s.tfix, s.tfixv, s.node_body, s.nn_own, s.hacc,
                                  HACC_BC)
 
-    def step_minimum(self, sim):
+    def step_minimum(self, st, ctx):
         """The local conduction stable step (with [conduction]): its global minimum comes back
         with the time step's reduction and sets the next step's sub-steps."""
         if not self.conduction:
             return np.inf
-        s = sim.store
-        return conduction_stable_dt(s.x, s.conn, s.emat, sim.mat_params, 0, s.ne_own)
+        s = st.store
+        return conduction_stable_dt(s.x, s.conn, s.emat, ctx.mat_params, 0, s.ne_own)
 
-    def set_step_minimum(self, sim, value):
+    def set_step_minimum(self, st, ctx, value):
         self.cond_dt = value
 
-    def _substeps(self, sim, dt):
+    def _substeps(self, st, ctx, dt):
         """Equal conduction sub-steps within dt, from the global conduction limit of the
         positions at the end of the last step (set with the time step)."""
-        lim = self.cond_dt * sim.safety
+        lim = self.cond_dt * ctx.safety
         nsub = 1 if lim >= dt else math.ceil(dt / lim)
         if nsub > NSUB_MAX:
-            sim.fail(f"check conduction sub-steps: heat conduction needs {nsub} sub-steps of "
+            ctx.fail(f"check conduction sub-steps: heat conduction needs {nsub} sub-steps of "
                      f"{lim:.3e} s per step of {dt:.3e} s (more than {NSUB_MAX})")
             nsub = NSUB_MAX
         self.nsub = nsub
         return nsub
 
-    def frame_values(self, sim, name, nodes, elems):
+    def frame_values(self, st, ctx, name, nodes, elems):
         """Temperatures of nodes, element means, element heat of one mechanism."""
-        s = sim.store
+        s = st.store
         if name == "temperature":
             return s.T[nodes]
         if name == "element_temperature":
             return s.T[s.conn[elems]].mean(axis=1)
         return s.eheat[elems, MECHANISM_COLUMN[name.removeprefix("heat_")]]
 
-    def energy_terms(self, sim, out):
-        s = sim.store
+    def energy_terms(self, st, ctx, out):
+        s = st.store
         nb, ne = s.nb_own, s.ne_own
         e = np.empty(nb)
         thermal_energy(s.T, self.t_init, s.tcap, s.node_body, s.nn_own, e)
@@ -266,7 +267,8 @@ class Heat(Effect):
             body_sums(s.ewq[:ne], s.estart[:nb], s.ne[:nb], viscous)
             paid += self.gamma * viscous
         if self.friction_heat > 0.0:
-            paid += self.friction_heat * s.acc[:nb, ACC_FRIC]
+            # The contacts' frictional dissipation (friction heating needs [contact])
+            paid += self.friction_heat * s.contact_acc[:nb, CACC_FRIC]
         out["heat_paid"] = paid
         if self.couple_elements:
             w = np.empty(nb)
@@ -278,7 +280,7 @@ class Heat(Effect):
             kirchhoff_pressure(s.x, s.conn, s.sig, 0, ne, tau)
             te = s.T[s.conn[:ne]].mean(axis=1)
             c = np.empty(nb)
-            body_sums(-3.0 * sim.mat_params[s.emat[:ne], ALPHA] * te * tau, s.estart[:nb],
+            body_sums(-3.0 * ctx.mat_params[s.emat[:ne], ALPHA] * te * tau, s.estart[:nb],
                       s.ne[:nb], c)
             out["coupling"] = c
 

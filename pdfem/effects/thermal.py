@@ -17,10 +17,10 @@ from pdfem.effects.base import Effect
 from pdfem.kernels.params import ALPHA, SOFT_K, SOFT_Y
 
 
-def fill_column(sim, column, key, default=0.0):
+def fill_column(st, ctx, column, key, default=0.0):
     """Material column from the resolved [materials] tables (default where a key is absent)."""
-    for i, tbl in enumerate(sim.resolved["materials"].values()):
-        sim.mat_params[i, column] = tbl.get(key, default)
+    for i, tbl in enumerate(ctx.resolved["materials"].values()):
+        ctx.mat_params[i, column] = tbl.get(key, default)
 
 
 class Conduction(Effect):
@@ -60,8 +60,8 @@ class ThermalExpansion(Effect):
 
     name = "thermal_expansion"
 
-    def setup(self, sim):
-        fill_column(sim, ALPHA, "expansion")
+    def setup(self, st, ctx):
+        fill_column(st, ctx, ALPHA, "expansion")
 
 
 class TemperatureDependence(Effect):
@@ -69,7 +69,7 @@ class TemperatureDependence(Effect):
 
     name = "temperature_dependence"
 
-    def setup(self, sim):
-        fill_column(sim, SOFT_K, "softening")
-        fill_column(sim, SOFT_Y, "strength_softening")
+    def setup(self, st, ctx):
+        fill_column(st, ctx, SOFT_K, "softening")
+        fill_column(st, ctx, SOFT_Y, "strength_softening")
 

@@ -21,23 +21,23 @@ class BulkViscosity(Effect):
         self.c_quad = float(table["quadratic"])
         self.c_lin = float(table["linear"])
 
-    def body_force(self, sim):
-        s = sim.store
-        with sim.timers.phase("elements"):
-            bulk_viscosity_forces(s.x, sim.du, s.conn, s.emat, sim.mat_params, 0, s.ne_own,
-                                  sim.dt, self.c_quad, self.c_lin, s.qv, s.ewq,
-                                  sim.f)
+    def body_force(self, st, ctx):
+        s = st.store
+        with ctx.timers.phase("elements"):
+            bulk_viscosity_forces(s.x, st.du, s.conn, s.emat, ctx.mat_params, 0, s.ne_own,
+                                  st.dt, self.c_quad, self.c_lin, s.qv, s.ewq,
+                                  st.f)
 
-    def stable_dt(self, sim):
-        s = sim.store
-        return bulk_viscosity_dt(s.x, sim.du, s.conn, s.emat, sim.mat_params, 0, s.ne_own,
-                                 sim.dt, self.c_quad, self.c_lin)
+    def stable_dt(self, st, ctx):
+        s = st.store
+        return bulk_viscosity_dt(s.x, st.du, s.conn, s.emat, ctx.mat_params, 0, s.ne_own,
+                                 st.dt, self.c_quad, self.c_lin)
 
-    def dt_limiter(self, sim, dt):
+    def dt_limiter(self, st, ctx, dt):
         return "the element wave speed with bulk viscosity"
 
-    def energy_terms(self, sim, out):
-        s = sim.store
+    def energy_terms(self, st, ctx, out):
+        s = st.store
         col = np.empty(s.nb_own)
         body_sums(s.ewq, s.estart[: s.nb_own], s.ne[: s.nb_own], col)
         out["viscous"] = col

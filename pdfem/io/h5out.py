@@ -60,7 +60,7 @@ def field_table(sim):
     }
     for eff in sim.effects:
         for name in eff.frame_fields:
-            values[name] = partial(eff.frame_values, sim, name)
+            values[name] = partial(eff.frame_values, sim.state, sim.ctx, name)
     out = {}
     for name, get in values.items():
         per, tail = FRAME_LAYOUT[name]

@@ -103,6 +103,12 @@ class Checkpointer:
         """The checkpoint's schedules, energy series and gauge histories into ``output``;
         returns (rows, ref)."""
         sim, st, arrays = self.sim, self.state, self.sim.checkpoint.arrays
+        # Its energy series has this run's terms (every rank reads them: all refuse together)
+        nterm = len(sim.terms)
+        if (arrays["energy_ref"].shape != (nterm,)
+                or arrays["energy_rows"].shape[1:] not in ((), (nterm + 3,))):
+            raise InputError(f"--restart: {sim.checkpoint.path} holds an energy series of other "
+                             f"terms than this run's {nterm} ({', '.join(sim.terms)})")
         output.frames.k, output.samples.k, output.gsched.k = (st["frames_k"], st["samples_k"],
                                                               st["gauges_k"])
         rows, ref = [], None

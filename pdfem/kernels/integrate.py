@@ -11,16 +11,15 @@ Every loop runs in node order, so per-body sums are the same on any number of ra
 import numpy as np
 from numba import njit
 
-# Columns of the per-body energy accumulator acc[b, :]
+# Columns of the per-body energy accumulator acc[b, :] (the integrator's; the contacts keep
+# their friction and damping losses in a field of their own, pdfem.effects.contact)
 ACC_DAMP = 0  # energy dissipated by mass-proportional damping [J/m]
 ACC_BC = 1  # work done by boundary-condition reactions [J/m]
-ACC_FRIC = 2  # energy dissipated by contact friction [J/m]
-ACC_CWORK = 3  # work done by contact forces on the body [J/m]
-ACC_DAMP_P = 4  # damping dissipation of the current step's later half interval (pending)
-ACC_BC_P = 5  # reaction work of the current step's later half interval (pending)
-ACC_CWORK_P = 6  # contact work of the current step's later half interval (pending)
-ACC_CDAMP = 7  # energy dissipated by the contacts' normal damping [J/m]
-NACC = 8
+ACC_CWORK = 2  # work done by contact forces on the body [J/m]
+ACC_DAMP_P = 3  # damping dissipation of the current step's later half interval (pending)
+ACC_BC_P = 4  # reaction work of the current step's later half interval (pending)
+ACC_CWORK_P = 5  # contact work of the current step's later half interval (pending)
+NACC = 6
 
 
 @njit(cache=True)

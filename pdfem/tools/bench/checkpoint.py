@@ -40,11 +40,12 @@ def _measured(comm, action):
     return global_max(comm, wall), peak - before
 
 
-def _state():
-    """A driver state as a run's first checkpoint has it (no frames, no energy rows yet)."""
+def _state(nterm):
+    """A driver state as a run's first checkpoint has it (no frames, no energy rows yet) for a
+    run of nterm energy terms."""
     return {"nframe": 0, "frames_k": 1, "samples_k": 1, "gauges_k": 1, "checkpoint_k": 1,
             "run_file": "", "segments": [],
-            "arrays": {"energy_rows": np.zeros((0, 2)), "energy_ref": np.zeros(2)}}
+            "arrays": {"energy_rows": np.zeros((0, nterm + 3)), "energy_ref": np.zeros(nterm)}}
 
 
 def run_checkpoint(grains, repeat, comm=None):
@@ -60,7 +61,7 @@ def run_checkpoint(grains, repeat, comm=None):
     folder = broadcast(comm, tempfile.mkdtemp(prefix="pdfem-bench-") if comm.rank == 0 else None)
     path = os.path.join(folder, "bench.ckpt.h5")
     resident = rss_bytes("VmRSS")
-    writes = [_measured(comm, lambda: write_checkpoint(path, sim, _state()))
+    writes = [_measured(comm, lambda: write_checkpoint(path, sim, _state(len(sim.terms))))
               for _ in range(repeat)]
     size = os.path.getsize(path)
     scene, fields = sim.scene, sim.fields

@@ -83,6 +83,9 @@ def contact_loss_share(path):
     t = 0 (the balance's scale)."""
     with h5py.File(path, "r") as f:
         e = f["energy"]
+        if "contact_loss" not in e:
+            # A run without contact
+            return 0.0
         loss = e["contact_loss"][...]
         i = int(np.argmax(np.abs(loss)))
         terms = [t for t in e if t not in ("time", "total", "balance_error")]

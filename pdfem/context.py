@@ -1,0 +1,42 @@
+"""What an effect's hooks read besides the state: the run's context.
+
+Every hook of an effect (:mod:`pdfem.effects.base`) receives the state it works on
+(:class:`pdfem.state.State`: the bodies, the time, the per-step arrays) and a
+:class:`Context`: the communicator, the timers, the materials' parameter table, the cell grid
+with its skin and the present cell reach, the blocks, the resolved scene, the handle of the
+temperature field's owner and :meth:`Context.fail` to report a failed check. The stepper
+(:class:`pdfem.solver.Simulation`) makes one at set-up; what it changes during a run (the
+reach at a rebuild, time.safety under the time-step remedy) the context reads from it.
+"""
+
+
+class Context:
+    """The run's context of a stepper ``sim`` (see the module docstring)."""
+
+    def __init__(self, sim):
+        self._sim = sim
+        self.comm, self.timers, self.resolved = sim.comm, sim.timers, sim.resolved
+        # Material parameters, one row per material (pdfem.kernels.params); an effect's set-up
+        # fills its own columns
+        self.mat_params = sim.mat_params
+        self.grid, self.skin = sim.grid, sim.skin
+        # Blocks (global bodies, stored first): their number, names and node sets
+        self.nglobal = sim.nglobal
+        self.block_names, self.block_sets = sim.block_names, sim.block_sets
+        self.restarted = sim.restarted
+        # The temperature field's owner (the heat effect; None without [heat])
+        self.heat = sim.heat
+
+    @property
+    def reach(self):
+        """Cells the contact search reaches around a grain's cell (set at each rebuild)."""
+        return self._sim.reach
+
+    @property
+    def safety(self):
+        """The present time.safety (the time-step remedy halves it)."""
+        return self._sim.safety
+
+    def fail(self, msg):
+        """Record a failed check; every rank stops at the end of the step."""
+        self._sim.fail(msg)

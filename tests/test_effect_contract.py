@@ -14,6 +14,7 @@ from mpi4py import MPI
 
 import pdfem.effects as effects
 from pdfem.driver import run
+from pdfem.errors import InputError
 from pdfem.scene import parse_scene
 from pdfem.scene import schema as S
 from pdfem.solver import Simulation
@@ -36,7 +37,6 @@ def push(monkeypatch):
     """The example effect registered on copies of the registry and the schema's lists."""
     monkeypatch.setattr(effects, "REGISTRY", dict(effects.REGISTRY))
     monkeypatch.setattr(S, "EFFECT_SECTIONS", [])
-    monkeypatch.setattr(S, "EFFECT_REQUIRES", {})
     return effects.register(_example())
 
 
@@ -84,3 +84,15 @@ def test_the_example_table_is_checked(push, tmp_path):
     with pytest.raises(InputError, match="unknown table"):
         parse_scene(drifting_grains(n=1, extra={"push": {"acceleration": [1.0, 0.0]}}),
                     str(tmp_path))
+
+
+def test_a_registered_effect_declares_what_a_scene_needs(push, monkeypatch, tmp_path):
+    """requires and material_keys of an added effect are checked like the built-in ones'."""
+    monkeypatch.setattr(push, "requires", ("gravity",))
+    monkeypatch.setattr(push, "material_keys", ("specific_heat",))
+    doc = drifting_grains(n=1, end=1e-6, extra={"push": {"acceleration": [1.0, 0.0]}})
+    with pytest.raises(InputError, match=r"push: needs the \[gravity\] table"):
+        parse_scene(doc, str(tmp_path))
+    doc["gravity"] = {"g": [0.0, 0.0]}
+    with pytest.raises(InputError, match=r"materials\.\w+\.specific_heat: required by \[push\]"):
+        parse_scene(doc, str(tmp_path))

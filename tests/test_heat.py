@@ -320,7 +320,8 @@ def test_thermoelastic_heating_and_thermal_expansion_come_together(tmp_path, one
     mat = plain_m(specific_heat=1000.0, expansion=1e-5)
     doc = block_scene(mat, (0.0, 0.0, 0.001, 0.001), 2, 2, 1e-7,
                        extra={"heat": {"initial": 300.0}, one: {}})
-    with pytest.raises(InputError, match=f": {other}: is required by \\[{one}\\]"):
+    with pytest.raises(InputError, match=f": {one}: needs the \\[{other}\\] table: "
+                       "thermo-elastic heating and thermal expansion are one coupling"):
         parse_scene(doc, str(tmp_path))
 
 

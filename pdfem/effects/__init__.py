@@ -94,7 +94,6 @@ def register(cls):
     REGISTRY[cls.name] = cls
     if cls.section is not None and cls.section not in S.EFFECT_SECTIONS:
         S.EFFECT_SECTIONS.append(cls.section)
-        S.EFFECT_REQUIRES[cls.section.name] = tuple(cls.requires)
     return cls
 
 

@@ -33,7 +33,10 @@ class Effect:
     # Its scene table (a pdfem.scene.keys.Section) and the tables it needs, for an effect
     # added with pdfem.effects.register; the built-in effects' tables are in the schema
     section = None
+    # What a scene needs for it: the tables it requires (other effects' or its own options'
+    # owner), the keys every material must set; check_scene for a rule of its own
     requires = ()
+    material_keys = ()
     # Its terms of the energy balance (pdfem.energy): (name, role) pairs, role +1 a part of
     # E, -1 subtracted from it, 0 a diagnostic; energy_terms gives their per-body values
     energy = ()
@@ -54,6 +57,11 @@ class Effect:
 
     def __init__(self, table, scene):
         self.table = table
+
+    @classmethod
+    def check_scene(cls, resolved):
+        """Raise pdfem.errors.SceneError (naming the key) when the resolved scene breaks a
+        rule of this effect beyond ``requires`` and ``material_keys``; called when present."""
 
     @classmethod
     def present(cls, resolved):

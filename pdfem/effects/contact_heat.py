@@ -17,6 +17,7 @@ class ContactConductance(Effect):
     contact effect, which reads [contact_conductance] itself)."""
 
     name = "contact_conductance"
+    requires = ("heat", "contact")
 
 
 class FrictionHeating(Effect):
@@ -24,3 +25,4 @@ class FrictionHeating(Effect):
     the contact effect, which reads [friction_heating] itself)."""
 
     name = "friction_heating"
+    requires = ("heat", "contact")

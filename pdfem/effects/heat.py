@@ -102,6 +102,7 @@ class Heat(Effect):
     """Nodal temperatures, their capacity and their explicit update."""
 
     name = "heat"
+    material_keys = ("specific_heat",)
     # The heat in the bodies, what paid for it and what left them; what the sources put on
     # the nodes and the stress work on the thermal strain are diagnostics
     energy = (("thermal", 1), ("heat_paid", -1), ("heat_bc", -1), ("coupling", 1),

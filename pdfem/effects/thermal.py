@@ -14,6 +14,7 @@ columns the element kernels read.
 """
 
 from pdfem.effects.base import Effect
+from pdfem.errors import SceneError
 from pdfem.kernels.params import ALPHA, SOFT_K, SOFT_Y
 
 
@@ -28,6 +29,8 @@ class Conduction(Effect):
     option of the heat effect)."""
 
     name = "conduction"
+    requires = ("heat",)
+    material_keys = ("conductivity",)
 
 
 class DissipationHeating(Effect):
@@ -35,6 +38,7 @@ class DissipationHeating(Effect):
     heat effect)."""
 
     name = "dissipation_heating"
+    requires = ("heat",)
 
 
 class ViscousHeating(Effect):
@@ -46,6 +50,7 @@ class ViscousHeating(Effect):
     """
 
     name = "viscous_heating"
+    requires = ("heat", "bulk_viscosity")
 
 
 class Thermoelastic(Effect):
@@ -53,12 +58,18 @@ class Thermoelastic(Effect):
     of the heat effect)."""
 
     name = "thermoelastic"
+    # Thermo-elastic heating and thermal expansion are one coupling: either alone creates
+    # energy that nothing pays for (pdfem.effects.heat)
+    requires = ("heat", "thermal_expansion")
+    material_keys = ("expansion",)
 
 
 class ThermalExpansion(Effect):
     """Thermal strain alpha dT (isotropic, sigma_zz included) removed from the elastic strain."""
 
     name = "thermal_expansion"
+    requires = ("heat", "thermoelastic")
+    material_keys = ("expansion",)
 
     def setup(self, st, ctx):
         fill_column(st, ctx, ALPHA, "expansion")
@@ -68,6 +79,15 @@ class TemperatureDependence(Effect):
     """K, G and the cap strength A, C scale by 1 - s (T - T_initial), never below 5 %."""
 
     name = "temperature_dependence"
+    requires = ("heat",)
+
+    @classmethod
+    def check_scene(cls, resolved):
+        """Some material must soften (softening or strength_softening > 0)."""
+        if not any(m.get("softening", 0.0) > 0.0 or m.get("strength_softening", 0.0) > 0.0
+                   for m in resolved["materials"].values()):
+            raise SceneError("temperature_dependence", "no material sets softening or "
+                             "strength_softening > 0")
 
     def setup(self, st, ctx):
         fill_column(st, ctx, SOFT_K, "softening")

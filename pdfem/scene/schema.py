@@ -435,10 +435,8 @@ SECTIONS = [
 ]
 
 # Tables of effects added with pdfem.effects.register (beyond the built-in ones above): plain
-# key tables, in the resolved scene only when given; EFFECT_REQUIRES names the tables each
-# needs
+# key tables, in the resolved scene only when given (the tables each needs: Effect.requires)
 EFFECT_SECTIONS = []
-EFFECT_REQUIRES = {}
 
 
 def all_sections():

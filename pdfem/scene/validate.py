@@ -70,17 +70,14 @@ def resolve(doc, base_dir):
     for name in ("heat",) + S.HEAT_EFFECTS:
         if name in doc:
             r[name] = check_table(doc[name], secs[name].keys, name)
-    # The tables of registered effects: plain key tables, each with the tables it needs
+    # The tables of registered effects: plain key tables (what each needs: _effect_rules)
     for sec in S.EFFECT_SECTIONS:
         if sec.name in doc:
             r[sec.name] = check_table(doc[sec.name], sec.keys, sec.name)
-            for need in S.EFFECT_REQUIRES.get(sec.name, ()):
-                if need not in doc:
-                    raise SceneError(sec.name, f"needs the [{need}] table")
     if "thermal_bc" in doc:
         r["thermal_bc"] = [check_table(b, S.THERMAL_BC, f"thermal_bc[{i}]") for i, b in
                            enumerate(array_of_tables(doc["thermal_bc"], "thermal_bc"))]
-    _heat_rules(r)
+    _effect_rules(r)
     r["output"] = _output(doc.get("output", {}), r["time"]["end"], r)
     r["gauges"] = _gauges(doc.get("gauges", []), r["blocks"])
     if "shock" in doc:
@@ -279,38 +276,31 @@ def _contact(value, mat_ids):
     return c
 
 
-def _heat_rules(r):
-    """Each heat effect needs [heat] and its inputs: one error naming the missing key."""
-    mats = r["materials"]
-    need = {"heat": ["specific_heat"], "conduction": ["conductivity"],
-            "thermoelastic": ["expansion"], "thermal_expansion": ["expansion"]}
-    for name in ("heat",) + S.HEAT_EFFECTS:
-        if name not in r:
+# Why a table is needed, in the words of the error naming it
+NEED_WHY = {"heat": " (the temperature field)",
+            "thermal_expansion": ": thermo-elastic heating and thermal expansion are one "
+                                 "coupling, and either alone creates energy (add the table)",
+            "thermoelastic": ": thermo-elastic heating and thermal expansion are one "
+                             "coupling, and either alone creates energy (add the table)"}
+
+
+def _effect_rules(r):
+    """Each present effect's requirements (pdfem.effects.base.Effect): the tables it needs,
+    the keys every material must set and its own rules; one error naming the first miss.
+    Then the thermal boundary conditions: [heat] and known blocks."""
+    from pdfem.effects import REGISTRY
+
+    for name, cls in REGISTRY.items():
+        if not cls.present(r):
             continue
-        if name != "heat" and "heat" not in r:
-            raise SceneError(name, "needs the [heat] table (the temperature field)")
-        for key in need.get(name, []):
-            for mname, m in mats.items():
+        for need in cls.requires:
+            if need not in r:
+                raise SceneError(name, f"needs the [{need}] table{NEED_WHY.get(need, '')}")
+        for key in cls.material_keys:
+            for mname, m in r["materials"].items():
                 if key not in m:
                     raise SceneError(f"materials.{mname}.{key}", f"required by [{name}]")
-    # Thermo-elastic heating and thermal expansion are one coupling: either alone creates
-    # energy that nothing pays for (pdfem.effects.heat)
-    for one, other in (("thermoelastic", "thermal_expansion"),
-                       ("thermal_expansion", "thermoelastic")):
-        if one in r and other not in r:
-            raise SceneError(other, f"is required by [{one}]: thermo-elastic heating and "
-                             "thermal expansion are one coupling, and either alone creates "
-                             "energy (add the table)")
-    if "temperature_dependence" in r and not any(m.get("softening", 0.0) > 0.0 or
-                                                 m.get("strength_softening", 0.0) > 0.0
-                                                 for m in mats.values()):
-        raise SceneError("temperature_dependence", "no material sets softening or "
-                         "strength_softening > 0")
-    for name in ("contact_conductance", "friction_heating"):
-        if name in r and "contact" not in r:
-            raise SceneError(name, "needs the [contact] table")
-    if "viscous_heating" in r and "bulk_viscosity" not in r:
-        raise SceneError("viscous_heating", "needs the [bulk_viscosity] table")
+        cls.check_scene(r)
     if "thermal_bc" in r:
         if "heat" not in r:
             raise SceneError("thermal_bc", "needs the [heat] table (the temperature field)")

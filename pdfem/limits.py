@@ -40,7 +40,8 @@ def check_step_count(sim, name, allow_huge=False, key="time.end", remedy=None):
     smaller), exceeds MAX_STEPS, unless ``allow_huge``; ``remedy`` (default: shorten key or
     set time.max_steps) says what to change. The step is the global one, so every rank
     decides alike."""
-    left = (sim.t_end - sim.t) / sim.dt if sim.dt > 0 else math.inf
+    # Python floats: a tiny step gives inf, not numpy's overflow warning
+    left = float(sim.t_end - sim.t) / float(sim.dt) if sim.dt > 0 else math.inf
     steps = min(left, sim.max_steps - sim.nstep) if sim.max_steps else left
     if steps > MAX_STEPS and not allow_huge:
         remedy = remedy or f"shorten {key}, set time.max_steps"

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from pdfem.effects.contact import _lexorder
+from pdfem.effects.contact_candidates import lexorder
 
 
 def _reference(keys):
@@ -14,15 +14,15 @@ def test_packed_sort_matches_lexsort_with_duplicates_and_wall_keys():
     keys = np.stack([rng.integers(0, 5000, 20000), rng.integers(0, 600, 20000),
                      rng.integers(-4, 5000, 20000), rng.integers(0, 600, 20000)], axis=1)
     keys[::7] = keys[3]  # duplicates keep their input order (stable)
-    assert np.array_equal(_lexorder(keys), _reference(keys))
+    assert np.array_equal(lexorder(keys), _reference(keys))
 
 
 def test_spans_beyond_int64_fall_back_to_lexsort():
     rng = np.random.default_rng(5)
     keys = rng.integers(-2**40, 2**40, size=(3000, 4))
-    assert np.array_equal(_lexorder(keys), _reference(keys))
+    assert np.array_equal(lexorder(keys), _reference(keys))
 
 
 def test_empty_and_single_rows():
-    assert _lexorder(np.zeros((0, 4), np.int64)).shape == (0,)
-    assert list(_lexorder(np.array([[3, 1, -1, 0]]))) == [0]
+    assert lexorder(np.zeros((0, 4), np.int64)).shape == (0,)
+    assert list(lexorder(np.array([[3, 1, -1, 0]]))) == [0]

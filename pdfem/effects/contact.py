@@ -1,15 +1,10 @@
 """Contact between bodies (report sec. 5): the overlap law, found on the cell grid.
 
-Detection has two levels, both at every rebuild. The cell grid gives candidate grain pairs:
-grains in the same or neighbouring cells whose bounding boxes (inflated by the skin) overlap.
-Their boundary-element pairs whose boxes are within the skin, and the owned grains' boundary
-elements within the skin of a domain wall, are the step's candidates, sorted once by contact
-key. No pair can come into contact before the next rebuild, since rebuilds happen whenever a
-node has moved half the skin. Every step one kernel pass (pdfem.kernels.contact.contact_pass)
-runs down the candidates: it keeps those whose boxes overlap now (or reach behind the wall),
-clips them, evaluates the law and writes the contacts that touch in key order. Blocks (global
-bodies) move freely: they are checked against every owned grain each step, and their
-candidates merged into the list in key order.
+The candidates (element pairs and element-wall pairs, in contact-key order) come from
+:mod:`pdfem.effects.contact_candidates`. Every step one kernel pass
+(pdfem.kernels.contact.contact_pass) runs down them: it keeps those whose boxes overlap now
+(or reach behind the wall), clips them, evaluates the law and writes the contacts that touch
+in key order.
 
 Bit-for-bit reproducibility: each pair is evaluated in canonical orientation (lower global key
 first) by every rank that owns one side; forces are added to owned nodes in the order of the
@@ -19,15 +14,12 @@ in key order. Contact history (the elastic shear displacement) is kept per key, 
 travels with a grain when it migrates.
 """
 
-import math
-
 import numpy as np
 
 from pdfem.effects.base import Effect
+from pdfem.effects.contact_candidates import Candidates, lexorder
 from pdfem.errors import InputError
 from pdfem.kernels import contact_law as L
-from pdfem.kernels.broad_phase import candidate_pairs, element_bboxes, wall_crossings
-from pdfem.kernels.centroids import body_centroids
 from pdfem.kernels.contact import (
     C_ACTIVE,
     NNOD,
@@ -37,7 +29,6 @@ from pdfem.kernels.contact import (
     R_WIDTH,
     contact_pass,
 )
-from pdfem.kernels.contact_keys import merge_candidates
 from pdfem.kernels.contact_step import (
     accumulate_sorted,
     contact_bookkeeping,
@@ -51,12 +42,6 @@ from pdfem.kernels.heat import (
     contact_heat,
 )
 from pdfem.kernels.integrate import ACC_CWORK
-from pdfem.kernels.neighbours import (
-    body_boxes,
-    grain_pairs,
-    key_spans,
-    pack_keys,
-)
 from pdfem.parallel.mpi import allgather_rows
 from pdfem.store import BODY, Field
 
@@ -65,10 +50,6 @@ RCAP = 0.95
 # A step may close a gap by at most this fraction of delta_max (two bodies each moving at the
 # fastest node speed): the overlap law must see a contact before it is deep
 APPROACH = 0.1
-# Element candidates are kept at a rebuild when their boxes are within the skin: a node moves
-# at most half the skin between rebuilds, so boxes that overlap now were within the skin then
-# (this relative slack covers the rounding of that displacement test)
-REACH_SLACK = 1e-6
 # No per-candidate law rows or history (contact_pass: the materials' law, the sorted history)
 NO_ROWS = np.zeros(0, np.int64)
 NO_HISTORY = np.zeros(0)
@@ -82,42 +63,6 @@ CONTACT_ACC = Field("contact_acc", BODY, (2,), np.float64)
 # Outward normals of the domain walls (pointing into the domain) and their box coordinate
 WALL_SIDES = {"left": ((1.0, 0.0), 0), "bottom": ((0.0, 1.0), 1), "right": ((-1.0, 0.0), 2),
               "top": ((0.0, -1.0), 3)}
-
-
-def _block_elements(s, g0):
-    """Number of elements of the g0 global bodies (blocks), stored first."""
-    return int(s.estart[g0 - 1] + s.ne[g0 - 1]) if g0 else 0
-
-
-def _sorted_candidates(s, pairs, welems, wids):
-    """Candidates of the contact pass (pdfem.kernels.contact_pass): element pairs (a, b) and
-    element-wall pairs (e, -1 - wall), sorted by global contact key."""
-    cand = np.concatenate([pairs, np.stack([welems, -1 - wids], axis=1)]).astype(np.int64)
-    a, b = cand[:, 0], cand[:, 1]
-    pair = b >= 0
-    bb = np.where(pair, b, 0)
-    keys = np.stack([s.elem_gid[a], s.elem_loc[a], np.where(pair, s.elem_gid[bb], b),
-                     np.where(pair, s.elem_loc[bb], 0)], axis=1)
-    return cand[_lexorder(keys)]
-
-
-def _lexorder(keys):
-    """Indices sorting (n, 4) int64 keys lexicographically (stable).
-
-    When the spans of the four columns multiply to less than 2^63 the rows are packed into
-    one int64 in mixed radix (an order-preserving map) and sorted once, about 15x faster
-    than np.lexsort; otherwise np.lexsort. Both give the same permutation.
-    """
-    if keys.shape[0] < 2:
-        return np.arange(keys.shape[0])
-    lo, span = np.empty(4, np.int64), np.empty(4, np.int64)
-    key_spans(keys, lo, span)
-    # Mixed-radix packing, exact while the product of the spans fits in int64
-    if math.prod(int(s) for s in span) < 2**63:
-        packed = np.empty(keys.shape[0], np.int64)
-        pack_keys(keys, lo, span, packed)
-        return np.argsort(packed, kind="stable")
-    return np.lexsort((keys[:, 3], keys[:, 2], keys[:, 1], keys[:, 0]))
 
 
 class Contact(Effect):
@@ -167,16 +112,14 @@ class Contact(Effect):
         self._wall_p0 = np.array([w[0] for w in self.walls]).reshape(-1, 2)
         self._wall_n = np.array([w[1] for w in self.walls]).reshape(-1, 2)
         self._wall_mu = np.array([w[2] for w in self.walls], float)
-        self._wall_out = np.zeros((2, 1024), np.int64)
         self.friction = bool(self.law[:, :, L.P_MU].max() > 0 or any(w[2] > 0 for w in self.walls))
         # Heat across contacts: its options [contact_conductance] and [friction_heating]
         r = scene.resolved
         self.heat_h = float(r["contact_conductance"]["h"]) if "contact_conductance" in r else 0.0
         self.heat_fraction = (float(r["friction_heating"]["fraction"])
                               if "friction_heating" in r else 0.0)
-        self.gpairs = np.zeros((0, 2), np.int64)
-        self._out = np.zeros((1024, 2), np.int64)
-        self.cand = np.zeros((0, 2), np.int64)
+        # Candidate element pairs: found at each rebuild, merged with the blocks' each step
+        self.detect = Candidates(self._wall_p0, self._wall_n)
         self._rows = 0
         self._outputs(1024)
         self._boxes = np.empty((0, 4))
@@ -192,87 +135,19 @@ class Contact(Effect):
 
     # ------------------------------------------------------------------ detection
     def after_rebuild(self, st, ctx):
-        """Candidate grain pairs from the cell grid (first level of detection), then their
-        element pairs and the owned grain elements near a wall, sorted by key (second)."""
-        s, g0 = st.store, ctx.nglobal
-        n = s.nbody - g0
-        cent = np.empty((n, 2))
-        body_centroids(s.x, s.nstart, s.nn, g0, s.nbody, cent)
-        cells = ctx.grid.cell_of(cent) if n else np.zeros(0, np.int64)
-        bbox = np.empty((s.nelem, 4))
-        element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
-        boxes = np.empty((s.nbody, 4))
-        body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
-        owned = (np.arange(g0, s.nbody) < s.nb_own).astype(np.int8)
-        pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], ctx.grid.nx, ctx.grid.ny,
-                            ctx.skin, ctx.reach)
-        self.gpairs = pairs + g0
-        reach = ctx.skin * (1.0 + REACH_SLACK)
-        epairs = self._element_pairs(st, ctx, bbox, self.gpairs, reach)
-        welems, wids = self._wall_elements(st, ctx, bbox, _block_elements(s, g0), s.ne_own, reach)
-        self.cand = _sorted_candidates(s, epairs, welems, wids)
+        """The candidates of the rebuilt store (pdfem.effects.contact_candidates)."""
+        self.detect.rebuild(st, ctx)
 
-    def _block_pairs(self, st, ctx, boxes):
-        """Owned grains near each block, and the block pairs (blocks move freely: every
-        step)."""
-        s, g0 = st.store, ctx.nglobal
-        parts = [np.zeros((0, 2), np.int64)]
-        own = np.arange(g0, s.nb_own)
-        for g in range(g0):
-            b = boxes[g]
-            near = own[(boxes[own, 0] <= b[2]) & (boxes[own, 2] >= b[0])
-                       & (boxes[own, 1] <= b[3]) & (boxes[own, 3] >= b[1])]
-            parts.append(np.stack([near, np.full(near.shape[0], g)], axis=1))
-            for h in range(g + 1, g0):
-                parts.append(np.array([[g, h]], np.int64))
-        return np.concatenate(parts).astype(np.int64)
-
-    def _element_pairs(self, st, ctx, bbox, bpairs, reach):
-        """Boundary-element pairs of the candidate bodies whose boxes are within reach."""
-        s = st.store
-        e0, e1 = s.estart, s.estart + s.ne
-        while True:
-            n = candidate_pairs(bbox, s.ebnd, s.elem_gid, s.elem_loc, e0, e1, bpairs, reach,
-                                self._out)
-            if n <= self._out.shape[0]:
-                return self._out[:n].copy()
-            self._out = np.zeros((2 * n, 2), np.int64)
-
-    def _wall_elements(self, st, ctx, bbox, e0, e1, reach):
-        """(elements, wall index) of the boundary elements of [e0, e1) within reach of a
-        wall's half-plane."""
-        s = st.store
-        if not self.walls:
-            return np.zeros(0, np.int64), np.zeros(0, np.int64)
-        while True:
-            m = wall_crossings(bbox, s.ebnd, e0, e1, self._wall_p0, self._wall_n, reach,
-                               self._wall_out[0], self._wall_out[1])
-            if m <= self._wall_out.shape[1]:
-                return self._wall_out[0, :m].copy(), self._wall_out[1, :m].copy()
-            self._wall_out = np.zeros((2, 2 * m), np.int64)
-
-    def _step_candidates(self, st, ctx):
-        """This step's candidates: those of the last rebuild, merged in key order with the
-        blocks' (element pairs and walls whose boxes overlap now)."""
-        s, g0 = st.store, ctx.nglobal
-        if g0 == 0:
-            return self.cand
-        bbox = np.empty((s.nelem, 4))
-        element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
-        boxes = np.empty((s.nbody, 4))
-        body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
-        pairs = self._element_pairs(st, ctx, bbox, self._block_pairs(st, ctx, boxes), 0.0)
-        welems, wids = self._wall_elements(st, ctx, bbox, 0, _block_elements(s, g0), 0.0)
-        blocks = _sorted_candidates(s, pairs, welems, wids)
-        cand = np.empty((self.cand.shape[0] + blocks.shape[0], 2), np.int64)
-        merge_candidates(self.cand, blocks, s.elem_gid, s.elem_loc, cand)
-        return cand
+    @property
+    def gpairs(self):
+        """Candidate grain pairs of the last rebuild (local body indices)."""
+        return self.detect.gpairs
 
     # ------------------------------------------------------------------ forces
     def contact_forces(self, st, ctx):
         """Evaluate every contact this rank needs and add the forces in key order."""
         with ctx.timers.phase("contact_detection"):
-            cand = self._step_candidates(st, ctx)
+            cand = self.detect.step(st, ctx)
         with ctx.timers.phase("contact_forces"):
             self._evaluate(st, ctx, cand)
 
@@ -385,7 +260,7 @@ class Contact(Effect):
             blk = np.searchsorted(s.gid[:g0], gkeys[:, 2])
             gel = np.stack([np.full(got.shape[0], -1), s.estart[blk] + gkeys[:, 3]], axis=1)
             e_all = np.concatenate([elems, gel]).astype(np.int64)
-        self._add(st, ctx, _lexorder(k_all), a_all, n_all, w_all, f_all, q_all, e_all)
+        self._add(st, ctx, lexorder(k_all), a_all, n_all, w_all, f_all, q_all, e_all)
 
     def _add(self, st, ctx, order, active, nodes, weights, fnod, q, elems, forces=True):
         """Forces (with forces) and heat (q not None) of the contacts in the given order to

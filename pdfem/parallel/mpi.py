@@ -16,7 +16,8 @@ from mpi4py import MPI
 def world():
     """The world communicator, with uncaught exceptions aborting every rank (never a hang)."""
     comm = MPI.COMM_WORLD
-    if comm.size > 1:
+    # Wrapped once: a second call must not stack another abort on the first
+    if comm.size > 1 and not getattr(sys.excepthook, "aborts_all", False):
         hook = sys.excepthook
 
         def abort_all(kind, value, tb):
@@ -24,6 +25,7 @@ def world():
             sys.stderr.flush()
             comm.Abort(1)
 
+        abort_all.aborts_all = True
         sys.excepthook = abort_all
     return comm
 

@@ -1,0 +1,150 @@
+"""Contact detection: the candidate element pairs of a rank, in contact-key order.
+
+Detection has two levels, both at every rebuild. The cell grid gives candidate grain pairs:
+grains in the same or neighbouring cells (within the cell reach) whose bounding boxes,
+inflated by the skin, overlap. Their boundary-element pairs whose boxes are within the skin,
+and the owned grains' boundary elements within the skin of a domain wall, are the step's
+candidates, sorted once by contact key. No pair can come into contact before the next
+rebuild, since rebuilds happen whenever a node may have moved half the skin. Blocks (global
+bodies) move freely: every step they are checked against every owned grain, and their
+candidates merged into the list in key order (:meth:`Candidates.step`).
+"""
+
+import math
+
+import numpy as np
+
+from pdfem.kernels.broad_phase import candidate_pairs, element_bboxes, wall_crossings
+from pdfem.kernels.centroids import body_centroids
+from pdfem.kernels.contact_keys import merge_candidates
+from pdfem.kernels.neighbours import body_boxes, grain_pairs, key_spans, pack_keys
+
+# Element candidates are kept at a rebuild when their boxes are within the skin: a node moves
+# at most half the skin between rebuilds, so boxes that overlap now were within the skin then
+# (this relative slack covers the rounding of that displacement test)
+REACH_SLACK = 1e-6
+
+
+def block_elements(s, g0):
+    """Number of elements of the g0 global bodies (blocks), stored first."""
+    return int(s.estart[g0 - 1] + s.ne[g0 - 1]) if g0 else 0
+
+
+def sorted_candidates(s, pairs, welems, wids):
+    """Candidates of the contact pass (pdfem.kernels.contact_pass): element pairs (a, b) and
+    element-wall pairs (e, -1 - wall), sorted by global contact key."""
+    cand = np.concatenate([pairs, np.stack([welems, -1 - wids], axis=1)]).astype(np.int64)
+    a, b = cand[:, 0], cand[:, 1]
+    pair = b >= 0
+    bb = np.where(pair, b, 0)
+    keys = np.stack([s.elem_gid[a], s.elem_loc[a], np.where(pair, s.elem_gid[bb], b),
+                     np.where(pair, s.elem_loc[bb], 0)], axis=1)
+    return cand[lexorder(keys)]
+
+
+def lexorder(keys):
+    """Indices sorting (n, 4) int64 keys lexicographically (stable).
+
+    When the spans of the four columns multiply to less than 2^63 the rows are packed into
+    one int64 in mixed radix (an order-preserving map) and sorted once, about 15x faster
+    than np.lexsort; otherwise np.lexsort. Both give the same permutation.
+    """
+    if keys.shape[0] < 2:
+        return np.arange(keys.shape[0])
+    lo, span = np.empty(4, np.int64), np.empty(4, np.int64)
+    key_spans(keys, lo, span)
+    # Mixed-radix packing, exact while the product of the spans fits in int64
+    if math.prod(int(s) for s in span) < 2**63:
+        packed = np.empty(keys.shape[0], np.int64)
+        pack_keys(keys, lo, span, packed)
+        return np.argsort(packed, kind="stable")
+    return np.lexsort((keys[:, 3], keys[:, 2], keys[:, 1], keys[:, 0]))
+
+
+class Candidates:
+    """The candidates of one rank: built at each rebuild (:meth:`rebuild`), merged with the
+    blocks' each step (:meth:`step`); walls given by their points and inward normals."""
+
+    def __init__(self, wall_p0, wall_n):
+        self._wall_p0, self._wall_n = wall_p0, wall_n
+        self.gpairs = np.zeros((0, 2), np.int64)
+        self.cand = np.zeros((0, 2), np.int64)
+        self._out = np.zeros((1024, 2), np.int64)
+        self._wall_out = np.zeros((2, 1024), np.int64)
+
+    def rebuild(self, st, ctx):
+        """Candidate grain pairs from the cell grid (first level of detection), then their
+        element pairs and the owned grain elements near a wall, sorted by key (second)."""
+        s, g0 = st.store, ctx.nglobal
+        n = s.nbody - g0
+        cent = np.empty((n, 2))
+        body_centroids(s.x, s.nstart, s.nn, g0, s.nbody, cent)
+        cells = ctx.grid.cell_of(cent) if n else np.zeros(0, np.int64)
+        bbox = np.empty((s.nelem, 4))
+        element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
+        boxes = np.empty((s.nbody, 4))
+        body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
+        owned = (np.arange(g0, s.nbody) < s.nb_own).astype(np.int8)
+        pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], ctx.grid.nx, ctx.grid.ny,
+                            ctx.skin, ctx.reach)
+        self.gpairs = pairs + g0
+        reach = ctx.skin * (1.0 + REACH_SLACK)
+        epairs = self._element_pairs(st, ctx, bbox, self.gpairs, reach)
+        welems, wids = self._wall_elements(st, ctx, bbox, block_elements(s, g0), s.ne_own, reach)
+        self.cand = sorted_candidates(s, epairs, welems, wids)
+
+    def _block_pairs(self, st, ctx, boxes):
+        """Owned grains near each block, and the block pairs (blocks move freely: every
+        step)."""
+        s, g0 = st.store, ctx.nglobal
+        parts = [np.zeros((0, 2), np.int64)]
+        own = np.arange(g0, s.nb_own)
+        for g in range(g0):
+            b = boxes[g]
+            near = own[(boxes[own, 0] <= b[2]) & (boxes[own, 2] >= b[0])
+                       & (boxes[own, 1] <= b[3]) & (boxes[own, 3] >= b[1])]
+            parts.append(np.stack([near, np.full(near.shape[0], g)], axis=1))
+            for h in range(g + 1, g0):
+                parts.append(np.array([[g, h]], np.int64))
+        return np.concatenate(parts).astype(np.int64)
+
+    def _element_pairs(self, st, ctx, bbox, bpairs, reach):
+        """Boundary-element pairs of the candidate bodies whose boxes are within reach."""
+        s = st.store
+        e0, e1 = s.estart, s.estart + s.ne
+        while True:
+            n = candidate_pairs(bbox, s.ebnd, s.elem_gid, s.elem_loc, e0, e1, bpairs, reach,
+                                self._out)
+            if n <= self._out.shape[0]:
+                return self._out[:n].copy()
+            self._out = np.zeros((2 * n, 2), np.int64)
+
+    def _wall_elements(self, st, ctx, bbox, e0, e1, reach):
+        """(elements, wall index) of the boundary elements of [e0, e1) within reach of a
+        wall's half-plane."""
+        s = st.store
+        if not self._wall_p0.shape[0]:
+            return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        while True:
+            m = wall_crossings(bbox, s.ebnd, e0, e1, self._wall_p0, self._wall_n, reach,
+                               self._wall_out[0], self._wall_out[1])
+            if m <= self._wall_out.shape[1]:
+                return self._wall_out[0, :m].copy(), self._wall_out[1, :m].copy()
+            self._wall_out = np.zeros((2, 2 * m), np.int64)
+
+    def step(self, st, ctx):
+        """This step's candidates: those of the last rebuild, merged in key order with the
+        blocks' (element pairs and walls whose boxes overlap now)."""
+        s, g0 = st.store, ctx.nglobal
+        if g0 == 0:
+            return self.cand
+        bbox = np.empty((s.nelem, 4))
+        element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
+        boxes = np.empty((s.nbody, 4))
+        body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
+        pairs = self._element_pairs(st, ctx, bbox, self._block_pairs(st, ctx, boxes), 0.0)
+        welems, wids = self._wall_elements(st, ctx, bbox, 0, block_elements(s, g0), 0.0)
+        blocks = sorted_candidates(s, pairs, welems, wids)
+        cand = np.empty((self.cand.shape[0] + blocks.shape[0], 2), np.int64)
+        merge_candidates(self.cand, blocks, s.elem_gid, s.elem_loc, cand)
+        return cand

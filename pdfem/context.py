@@ -1,12 +1,14 @@
-"""What an effect's hooks read besides the state: the run's context.
+"""What the parts of a run read besides the state: the run's context.
 
-Every hook of an effect (:mod:`pdfem.effects.base`) receives the state it works on
-(:class:`pdfem.state.State`: the bodies, the time, the per-step arrays) and a
-:class:`Context`: the communicator, the timers, the materials' parameter table, the cell grid
-with its skin and the present cell reach, the blocks, the resolved scene, the handle of the
-temperature field's owner and :meth:`Context.fail` to report a failed check. The stepper
-(:class:`pdfem.solver.Simulation`) makes one at set-up; what it changes during a run (the
-reach at a rebuild, time.safety under the time-step remedy) the context reads from it.
+Every hook of an effect (:mod:`pdfem.effects.base`), the energy balance (:mod:`pdfem.energy`),
+the gauges and io's writers receive the state they work on (:class:`pdfem.state.State`: the
+bodies, the time, the per-step arrays) and a :class:`Context`: the communicator, the timers,
+the scene, the materials' parameter table, the cell grid with its skin and the present cell
+reach, the blocks, the global layout of bodies, the run's effects and energy terms, the
+handle of the temperature field's owner and :meth:`Context.fail` to report a failed check.
+The stepper (:class:`pdfem.solver.Simulation`) makes one at set-up; what it changes during a
+run (the reach at a rebuild, time.safety under the time-step remedy) the context reads from
+it. Nothing here writes the state.
 """
 
 
@@ -26,6 +28,16 @@ class Context:
         self.restarted = sim.restarted
         # The temperature field's owner (the heat effect; None without [heat])
         self.heat = sim.heat
+        # The scene and what it makes of a run: the global layout of bodies, nodes and
+        # elements (pdfem.build.Layout), the store's fields, integration points, the active
+        # effects, the energy terms, whether contact forces exist, the end time and step cap
+        self.scene, self.layout, self.fields, self.nip = sim.scene, sim.layout, sim.fields, \
+            sim.nip
+        self.effects, self.effect_names, self.terms = sim.effects, sim.effect_names, sim.terms
+        self.has_contact, self.t_end, self.max_steps = sim.has_contact, sim.t_end, sim.max_steps
+        self.mat_ids = sim.mat_ids
+        # The hourglass coefficient of the 1-point rule (0 for 2x2)
+        self.hg_coef = sim.hg_coef
 
     @property
     def reach(self):
@@ -36,6 +48,11 @@ class Context:
     def safety(self):
         """The present time.safety (the time-step remedy halves it)."""
         return self._sim.safety
+
+    @property
+    def energy_floor(self):
+        """The energy balance's smallest scale (pdfem.energy.energy_floor), once set up."""
+        return self._sim.energy_floor
 
     def fail(self, msg):
         """Record a failed check; every rank stops at the end of the step."""

@@ -40,7 +40,7 @@ def _run(sim, out_path, quiet, log):
     if comm.rank == 0:
         for line in guards.actions:
             log(line)
-    guards.keep(sim, output.snapshot())
+    guards.keep(sim.state, sim.owner, output.snapshot())
     # The t = 0 terms on every rank, for the drift check between samples
     guards.ref = broadcast(comm, output.ref)
     guards.sample_scale = output.sample_scale()
@@ -52,8 +52,12 @@ def _run(sim, out_path, quiet, log):
         except SimulationError as exc:
             if not guards.can_retry():
                 _fail(sim, output, exc)
-            c, line = guards.retry(sim, str(exc))
-            output.restore(c)
+            # The time-step remedy: back to the last good state, time step and safety halved
+            last = guards.use_retry()
+            sim.restore(last)
+            old = sim.halve_step()
+            line = guards.retried(str(exc), sim.nstep, sim.t, old, sim.safety)
+            output.restore(last.driver)
             if comm.rank == 0:
                 log(line)
             continue
@@ -64,8 +68,8 @@ def _run(sim, out_path, quiet, log):
                 log(f"first step at {first_step:.2f} s after start")
         if output.ckpt.due(at_end):
             output.checkpoint()
-        if guards.due(sim):
-            guards.keep(sim, output.snapshot())
+        if guards.due(sim.nstep):
+            guards.keep(sim.state, sim.owner, output.snapshot())
         if sim.stop_requested and not at_end:
             stopped = True
             break
@@ -112,7 +116,7 @@ def _drift_check(sim, guards):
     fraction of them (a quarter at step 1 of a bed falling from rest)."""
     if not guards.sample_scale > 0.0:
         return
-    terms = fixed_point_terms(sim)
+    terms = fixed_point_terms(sim.state, sim.ctx)
     # The samples' largest scale joins the floor: the scale is never below it
     floor = max(sim.energy_floor, guards.sample_scale)
     err = math.inf if terms is None else balance(terms, guards.ref, floor)[1]
@@ -125,7 +129,9 @@ def _drift_check(sim, guards):
 def _fail(sim, output, exc):
     """A failed check with no remedy left: the last good state becomes the checkpoint (the
     run file stays as <path>.part for a restart from it); raise the error, extended."""
-    output.restore(sim.guards.rollback(sim))
+    last = sim.guards.last
+    sim.restore(last)
+    output.restore(last.driver)
     output.checkpoint()
     output.suspend()
     help_ = advice(str(exc))

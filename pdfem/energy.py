@@ -81,14 +81,14 @@ QBITS = 62
 FLOOR = 1e-12
 
 
-def body_terms(sim):
-    """(nb, len(sim.terms)) array of per-body energy terms of the owned bodies of this rank
+def body_terms(st, ctx):
+    """(nb, len(ctx.terms)) array of per-body energy terms of the owned bodies of this rank
     (global bodies on rank 0 only), in the order of the run's terms."""
-    s = sim.store
+    s = st.store
     nb = s.nb_own
-    col = {t: i for i, t in enumerate(sim.terms)}
+    col = {t: i for i, t in enumerate(ctx.terms)}
     rows = np.zeros((nb, len(col)))
-    rows[:, col["kinetic"]] = sim.kin[:nb]
+    rows[:, col["kinetic"]] = st.kin[:nb]
     # Internal energy of the elements: the stress work done on them (hourglass included)
     # less its plastic part, from the stored energy at t = 0 (see initial_strain_work)
     work = np.empty(nb)
@@ -99,56 +99,56 @@ def body_terms(sim):
     rows[:, col["damping"]] = s.acc[:nb, ACC_DAMP]
     rows[:, col["bc_work"]] = s.acc[:nb, ACC_BC]
     # The effects' terms (gravity potential, contact energy, heat, ...), each effect's added
-    for eff in sim.effects:
+    for eff in ctx.effects:
         extra = {}
-        eff.energy_terms(sim.state, sim.ctx, extra)
+        eff.energy_terms(st, ctx, extra)
         for name, vals in extra.items():
             if name not in col:
                 raise KeyError(f"effect {eff.name!r} gives the energy term {name!r}, which it "
                                "does not declare (Effect.energy)")
             rows[:, col[name]] += vals[:nb]
     # Global bodies are counted once, on rank 0
-    if sim.comm.rank != 0:
+    if ctx.comm.rank != 0:
         rows = rows[s.isglobal[:nb] == 0]
     return rows
 
 
-def initial_strain_work(sim):
+def initial_strain_work(st, ctx):
     """Start the elements' stress-work accumulators at their stored elastic energy (a
     prepared bed starts stressed), so that the strain term is that energy plus the work since."""
-    s = sim.store
+    s = st.store
     ee = np.zeros(s.ne_own)
-    q4_strain_energy(s.x, s.conn, s.emat, sim.mat_params, s.sig, s.hgq, sim.hg_coef, 0,
+    q4_strain_energy(s.x, s.conn, s.emat, ctx.mat_params, s.sig, s.hgq, ctx.hg_coef, 0,
                      s.ne_own, ee)
     s.ewint[: s.ne_own] += ee
 
 
-def energy_floor(sim):
+def energy_floor(st, ctx):
     """FLOOR x total mass x the largest squared P-wave speed of the materials [J/m], the same
     on every rank and any rank count (per-body masses summed exactly on rank 0)."""
     from pdfem.kernels.params import BULK, RHO, SHEAR
 
-    s = sim.store
+    s = st.store
     nb = s.nb_own
     mass = np.empty(nb)
     body_sums(s.m[: s.nn_own], s.nstart[:nb], s.nn[:nb], mass)
-    if sim.comm.rank != 0:
+    if ctx.comm.rank != 0:
         mass = mass[s.isglobal[:nb] == 0]
-    rows = gather_rows(sim.comm, mass.reshape(-1, 1))
+    rows = gather_rows(ctx.comm, mass.reshape(-1, 1))
     out = None
     if rows is not None:
-        p = sim.mat_params
+        p = ctx.mat_params
         c2 = float(np.max((p[:, BULK] + 4.0 * p[:, SHEAR] / 3.0) / p[:, RHO]))
         out = FLOOR * math.fsum(rows[:, 0]) * c2
-    return broadcast(sim.comm, out)
+    return broadcast(ctx.comm, out)
 
 
-def global_terms(sim):
+def global_terms(st, ctx):
     """{term: exact global sum} on rank 0 (None elsewhere)."""
-    rows = gather_rows(sim.comm, body_terms(sim))
+    rows = gather_rows(ctx.comm, body_terms(st, ctx))
     if rows is None:
         return None
-    return {t: math.fsum(rows[:, i]) for i, t in enumerate(sim.terms)}
+    return {t: math.fsum(rows[:, i]) for i, t in enumerate(ctx.terms)}
 
 
 def balance(terms, ref, floor=0.0):
@@ -171,11 +171,11 @@ def balance_scale(terms, ref, floor=0.0):
                 for v in (terms, ref)] + [floor])
 
 
-def fixed_point_terms(sim):
+def fixed_point_terms(st, ctx):
     """{term: global sum} on every rank, from integer multiples of a per-term quantum (see
     the module note), or None when a value is not finite."""
-    sums = fixed_point_sums(body_terms(sim), sim.comm, sim.layout.nbody)
-    return None if sums is None else dict(zip(sim.terms, sums, strict=True))
+    sums = fixed_point_sums(body_terms(st, ctx), ctx.comm, ctx.layout.nbody)
+    return None if sums is None else dict(zip(ctx.terms, sums, strict=True))
 
 
 def fixed_point_sums(rows, comm, nbody):

@@ -40,9 +40,9 @@ def _quad_contains(xe, p):
     return True
 
 
-def _locate(sim, point, where):
+def _locate(st, ctx, point, where):
     """(body gid, local element) of the element holding ``point`` at t = 0, any rank."""
-    s, comm = sim.store, sim.comm
+    s, comm = st.store, ctx.comm
     found = (np.iinfo(np.int64).max, -1)
     p = np.asarray(point, float)
     for b in range(s.nb_own):
@@ -85,8 +85,8 @@ class Gauges:
     ``saved``: the packed element sets of a checkpoint (a restart; ``where`` names it in an
     error); otherwise they are found from the scene in the current (initial) state."""
 
-    def __init__(self, sim, saved=None, where=None):
-        r = sim.resolved
+    def __init__(self, st, ctx, saved=None, where=None):
+        r = ctx.resolved
         self.names = [g["name"] for g in r.get("gauges", [])]
         self.times, self.rows = [], []
         if saved is not None:
@@ -94,7 +94,7 @@ class Gauges:
             return
         self.sets = []
         names = [b["name"] for b in r.get("blocks", [])]
-        ng = sim.layout.nbody - len(names)
+        ng = ctx.layout.nbody - len(names)
         for i, g in enumerate(r.get("gauges", [])):
             if "body" in g:
                 k = names.index(g["body"])
@@ -103,7 +103,7 @@ class Gauges:
                          block_elements(blk["nx"], blk["ny"], g["side"]))
                 gid = ng + k
             else:
-                gid, le = _locate(sim, g["point"], f"{sim.scene.name}: gauges[{i}]")
+                gid, le = _locate(st, ctx, g["point"], f"{ctx.scene.name}: gauges[{i}]")
                 elems = np.array([le], np.int64)
             self.sets.append((gid, elems))
 
@@ -116,9 +116,9 @@ class Gauges:
         parts = [np.concatenate([[gid, e.size], e]) for gid, e in self.sets]
         return np.concatenate(parts).astype(np.float64) if parts else np.zeros(0)
 
-    def values(self, sim):
+    def values(self, st, ctx):
         """(ngauge, NCOL) means at the current state, on every rank (collective)."""
-        s, comm = sim.store, sim.comm
+        s, comm = st.store, ctx.comm
         acc = np.zeros((len(self.names), NCOL + 1))
         own = s.gid[: s.nb_own]
         for i, (gid, elems) in enumerate(self.sets):
@@ -133,18 +133,18 @@ class Gauges:
             acc[i, 0] = area.sum()
             acc[i, 1:3] = (area[:, None] * ve.mean(axis=1)).sum(axis=0)
             acc[i, 3:7] = (area[:, None] * s.sig[e].mean(axis=1)).sum(axis=0)
-            if sim.fc.shape[0]:
-                acc[i, 7:] = sim.fc[np.unique(s.conn[e])].sum(axis=0)
+            if st.fc.shape[0]:
+                acc[i, 7:] = st.fc[np.unique(s.conn[e])].sum(axis=0)
         array_sum(comm, acc)
         # Area-weighted means of velocity and stress; the force is a sum
         means = acc[:, 1:7] / np.where(acc[:, :1] > 0.0, acc[:, :1], 1.0)
         return np.concatenate([means, acc[:, 7:]], axis=1)
 
-    def sample(self, sim):
+    def sample(self, st, ctx):
         """Record one sample (collective; rank 0 keeps the history)."""
-        vals = self.values(sim)
-        if sim.comm.rank == 0:
-            self.times.append(sim.t)
+        vals = self.values(st, ctx)
+        if ctx.comm.rank == 0:
+            self.times.append(st.t)
             self.rows.append(vals)
 
     def history(self):

@@ -8,10 +8,11 @@ at each energy sample). This module keeps what a failure needs:
 - an in-memory copy of the state every ``guards.snapshot_steps`` steps (the owned bodies with
   their contact history, the time-step state, the cell owners and the driver's output
   counters), taken at the end of a step whose checks all passed: the *last good state*;
-- :meth:`Guards.rollback`, which puts that state back exactly as a restart from a checkpoint
-  would (rebuild of ghosts from the owned bodies, on any number of ranks), so the driver can
-  either write it as a checkpoint (``<run file>.ckpt.h5``) or retry from it with half the time
-  step (the ``dt_retries`` remedy);
+- the ``dt_retries`` remedy's count (:meth:`Guards.use_retry`) and the lines saying what the
+  remedies did. The driver puts the last good state back into the stepper
+  (:meth:`pdfem.solver.Simulation.restore`, exactly as a restart from a checkpoint would:
+  ghosts rebuilt from the owned bodies, on any number of ranks) and either writes it as a
+  checkpoint (``<run file>.ckpt.h5``) or retries from it with half the time step;
 - the ``cap_contact`` remedy is the contact's (:mod:`pdfem.effects.contact_cap`), applied once
   at set-up.
 """
@@ -51,18 +52,20 @@ class LastGood:
     """The last good state of the guards: the state's snapshot at the end of one good step
     (every rank holds its owned bodies), the cell owners and the output's counters."""
 
-    def __init__(self, sim, output):
-        self.state = sim.state.snapshot()
-        self.owner = sim.owner.copy()
+    def __init__(self, st, owner, output):
+        self.state = st.snapshot()
+        self.owner = owner.copy()
         self.nstep = self.state.nstep
         self.driver = dict(output)
 
 
 class Guards:
-    """The [guards] table of a run: snapshots, rollback and the time-step remedy."""
+    """The [guards] table of a run (``table``): the last good state, the time-step remedy's
+    retries and what the remedies did. The driver acts on them: it keeps a state, and on a
+    failed check puts the last good one back into the stepper (and halves the step)."""
 
-    def __init__(self, sim):
-        g = sim.resolved["guards"]
+    def __init__(self, table):
+        g = table
         self.energy_drift = g["energy_drift"]
         self.energy_steps = g["energy_steps"]
         # The t = 0 terms, on every rank, for the drift check between samples (driver), and
@@ -75,32 +78,30 @@ class Guards:
         self.last = None
         self.actions = []
 
-    def due(self, sim):
-        """True when a snapshot is to be taken after this step."""
-        return self.last is None or sim.nstep - self.last.nstep >= self.every
+    def due(self, nstep):
+        """True when a snapshot is to be taken after step ``nstep``."""
+        return self.last is None or nstep - self.last.nstep >= self.every
 
-    def keep(self, sim, driver):
-        """Keep the current state (the end of a step that passed every check) as last good;
-        ``driver`` holds the output counters to restore with it."""
-        self.last = LastGood(sim, driver)
-
-    def rollback(self, sim):
-        """Put the last good state back into ``sim`` (collective); return its driver dict."""
-        sim.restore(self.last)
-        return dict(self.last.driver)
+    def keep(self, st, owner, output):
+        """Keep the state ``st`` (the end of a step that passed every check) as last good,
+        with the cell owners and ``output``, the output's counters to restore with it."""
+        self.last = LastGood(st, owner, output)
 
     def can_retry(self):
         """True when the time-step remedy has a retry left."""
         return self.retries_left > 0
 
-    def retry(self, sim, reason):
-        """The time-step remedy: back to the last good state, time step and safety halved.
-        Returns the driver dict of that state and the line that says what was done."""
-        driver = self.rollback(sim)
+    def use_retry(self):
+        """Spend one retry of the time-step remedy; returns the last good state to go back
+        to."""
         self.retries_left -= 1
-        old = sim.halve_step()
+        return self.last
+
+    def retried(self, reason, nstep, t, old_safety, safety):
+        """Record a retry (back at step ``nstep``, time ``t``, time.safety ``old_safety`` ->
+        ``safety``); returns the line that says what was done."""
         n = self.retries - self.retries_left
-        line = (f"guard: {reason}; remedy {n} of {self.retries}: back to step {sim.nstep} "
-                f"(t={sim.t:.6e} s), time step halved (time.safety {old:g} -> {sim.safety:g})")
+        line = (f"guard: {reason}; remedy {n} of {self.retries}: back to step {nstep} "
+                f"(t={t:.6e} s), time step halved (time.safety {old_safety:g} -> {safety:g})")
         self.actions.append(line)
-        return driver, line
+        return line

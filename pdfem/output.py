@@ -59,19 +59,20 @@ class RunOutput:
         if sim.restarted:
             saved = sim.checkpoint.arrays.get("gauge_sets")
             where = f"--restart: {sim.checkpoint.path}"
-        self.gauges, self.gsched = Gauges(sim, saved, where), Schedule(out["gauge_interval"])
+        self.gauges = Gauges(sim.state, sim.ctx, saved, where)
+        self.gsched = Schedule(out["gauge_interval"])
         self.ckpt = Checkpointer(sim, out_path, out)
-        self.writer = RunWriter(out_path, sim, nframes, out["fields"],
+        self.writer = RunWriter(out_path, sim.state, sim.ctx, nframes, out["fields"],
                                 resume=self.ckpt.resume() if sim.restarted else None)
         self.rows, self.ref = [], None
         if sim.restarted:
             self.rows, self.ref = self.ckpt.restore(self)
         else:
             # Frame and energy at t = 0
-            self.writer.write_frame(sim)
+            self.writer.write_frame(sim.state, sim.ctx)
             if len(self.gauges):
-                self.gauges.sample(sim)
-            terms = global_terms(sim)
+                self.gauges.sample(sim.state, sim.ctx)
+            terms = global_terms(sim.state, sim.ctx)
             if sim.comm.rank == 0:
                 self.ref = terms
                 self.rows.append(energy_row(sim.t, terms, self.ref, sim.energy_floor))
@@ -83,13 +84,13 @@ class RunOutput:
         sim, guards = self.sim, self.sim.guards
         if (self.frames.due(sim.t) or at_end) and self.writer.nframe < self.nframes:
             with sim.timers.phase("output"):
-                self.writer.write_frame(sim)
+                self.writer.write_frame(sim.state, sim.ctx)
         if len(self.gauges) and (self.gsched.due(sim.t) or at_end):
             with sim.timers.phase("diagnostics"):
-                self.gauges.sample(sim)
+                self.gauges.sample(sim.state, sim.ctx)
         if self.samples.due(sim.t) or at_end:
             with sim.timers.phase("diagnostics"):
-                terms = global_terms(sim)
+                terms = global_terms(sim.state, sim.ctx)
                 msg = scale = None
                 if sim.comm.rank == 0:
                     self.rows.append(energy_row(sim.t, terms, self.ref, sim.energy_floor))

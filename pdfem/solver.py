@@ -115,9 +115,9 @@ class Simulation:
         self.hooks = hook_table(self.effects)
         self.minima = self.hooks["step_minimum"]
         self.drives = Drives(self)
-        self.guards = Guards(self)
+        self.guards = Guards(r["guards"])
         self._cap_contact(restart)
-        self.energy_floor = energy_floor(self)
+        self.energy_floor = energy_floor(self.state, self.ctx)
         # The set-up's temporaries are freed: give their pages back to the OS
         trim()
         self._fail_msg = ""
@@ -137,7 +137,7 @@ class Simulation:
             self.refresh_reductions()
             return
         # Forces at t = 0 and the first half step; energy accumulators from the t = 0 state
-        initial_strain_work(self)
+        initial_strain_work(st, self.ctx)
         self.compute_forces()
         for eff in self.hooks["start_work"]:
             eff.start_work(st, self.ctx)

@@ -31,7 +31,7 @@ def test_head_on_collision_exchanges_velocities(tmp_path):
                      MPI.COMM_SELF)
     s = sim.store
     scale = s.m.sum() * v0
-    k0 = global_terms(sim)["kinetic"]
+    k0 = global_terms(sim.state, sim.ctx)["kinetic"]
     touched = False
     while sim.t < sim.t_end:
         sim.step()
@@ -56,7 +56,7 @@ def _collide(tmp_path, damping, v0=20.0):
 
     sim = Simulation(parse_scene(collision(v=v0, kn0=1e13, end=2e-5, damping=damping),
                                  str(tmp_path)), MPI.COMM_SELF)
-    ref = global_terms(sim)
+    ref = global_terms(sim.state, sim.ctx)
     touched = False
     while sim.t < sim.t_end:
         sim.step()
@@ -64,7 +64,7 @@ def _collide(tmp_path, damping, v0=20.0):
         touched |= n > 0
         if touched and n == 0:
             break
-    terms = global_terms(sim)
+    terms = global_terms(sim.state, sim.ctx)
     return (-_com_velocity(sim, 0)[0] / v0, balance(terms, ref)[1],
             terms["contact_damping"] / ref["kinetic"], terms["contact_loss"] / ref["kinetic"])
 
@@ -123,13 +123,13 @@ def _rest():
 def test_grain_at_rest_on_the_floor_carries_its_weight(tmp_path):
     sim = Simulation(parse_scene(_rest(), str(tmp_path)), MPI.COMM_SELF)
     weight = sim.store.m.sum() * 1.0e4
-    pe0 = global_terms(sim)["potential"]
+    pe0 = global_terms(sim.state, sim.ctx)["potential"]
     # At rest: kinetic energy below 1e-6 of the potential energy drop for 10 samples running
     calm = 0
     while calm < 10 and sim.nstep < 100000:
         sim.step()
         if sim.nstep % 100 == 0:
-            terms = global_terms(sim)
+            terms = global_terms(sim.state, sim.ctx)
             calm = calm + 1 if abs(terms["kinetic"]) < 1e-6 * (pe0 - terms["potential"]) else 0
     assert calm == 10
     last = _contact(sim).last
@@ -248,7 +248,7 @@ def test_per_contact_slip_and_dissipation_of_a_sliding_block(tmp_path):
         sim.step()
         if sim.t < 0.5 * sim.t_end:
             continue
-        rows = split_rows(contact_rows(sim))
+        rows = split_rows(contact_rows(sim.state, sim.ctx))
         v = abs((s.m * s.v[:, 0]).sum() / s.m.sum())
         assert (rows["key"][:, 2] < 0).all() and (rows["element"][:, 1] == -1).all()
         assert np.allclose(rows["normal"], [0.0, -1.0])

@@ -29,15 +29,15 @@ def _sim(tmp_path, gauges):
 def test_point_gauge_reads_the_grain_it_sits_in(tmp_path):
     # Grain 0 is centred at (0.006, 0.0015): a rigid drift, so the gauge reads its velocity
     sim = _sim(tmp_path, [{"name": "g", "point": [0.006, 0.0015]}])
-    g = Gauges(sim)
+    g = Gauges(sim.state, sim.ctx)
     assert g.sets[0][0] == 0
-    vals = g.values(sim)
+    vals = g.values(sim.state, sim.ctx)
     v0 = sim.scene.grains["velocity"][0]
     assert np.allclose(vals[0, :2], v0, rtol=1e-12, atol=1e-9)
     assert np.all(vals[0, 2:] == 0.0)
     for _ in range(20):
         sim.step()
-    g.sample(sim)
+    g.sample(sim.state, sim.ctx)
     t, hist = g.history()
     assert t.shape == (1,) and np.allclose(hist[0, 0, :2], v0, rtol=1e-9)
 
@@ -49,7 +49,7 @@ def test_point_outside_every_element_is_an_input_error(tmp_path):
     sim = Simulation(parse_scene(doc, tmp_path, name="gauged.toml"), MPI.COMM_SELF)
     with pytest.raises(InputError, match=r"^gauged.toml: gauges\[0\]\.point: no element "
                        "contains"):
-        Gauges(sim)
+        Gauges(sim.state, sim.ctx)
 
 
 def test_block_gauge_reads_the_contact_force_on_its_nodes(tmp_path):
@@ -70,11 +70,11 @@ def test_block_gauge_reads_the_contact_force_on_its_nodes(tmp_path):
         "output": {"path": str(tmp_path / "r.h5"), "interval": 1.0e-6},
     }
     sim = Simulation(parse_scene(doc, tmp_path), MPI.COMM_SELF)
-    g = Gauges(sim)
-    assert np.all(g.values(sim)[0, 6:] == 0.0)
+    g = Gauges(sim.state, sim.ctx)
+    assert np.all(g.values(sim.state, sim.ctx)[0, 6:] == 0.0)
     while sim.t < sim.t_end:
         sim.step()
-    vals = g.values(sim)
+    vals = g.values(sim.state, sim.ctx)
     s = sim.store
     grain = [b for b in range(s.nb_own) if not s.isglobal[b]][0]
     on_grain = sim.fc[s.nstart[grain]:s.nstart[grain] + s.nn[grain]].sum(axis=0)

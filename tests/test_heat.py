@@ -293,7 +293,7 @@ def test_per_contact_heat_is_h_width_delta_t(tmp_path):
         temp = {0: 300.0, 1: 450.0}
         s.T[:] = [temp[int(g)] for g in s.gid[s.node_body]]
         sim.step()
-        rows = split_rows(contact_rows(sim))
+        rows = split_rows(contact_rows(sim.state, sim.ctx))
         for key, w, q in zip(rows["key"], rows["width"], rows["heat"], strict=True):
             assert q == pytest.approx(h * w * (temp[int(key[2])] - temp[int(key[0])]),
                                       rel=1e-12)

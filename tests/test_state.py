@@ -47,7 +47,7 @@ def test_rollback_restores_the_snapshot_exactly(tmp_path):
     sim = _sim(tmp_path)
     for _ in range(20):
         sim.step()
-    last = LastGood(sim, {})
+    last = LastGood(sim.state, sim.owner, {})
     t0, n0 = sim.t, sim.nstep
     for _ in range(20):
         sim.step()

@@ -51,40 +51,40 @@ STATE_KEYS = ("t", "nstep", "dt", "dt_prev", "nframe", "frames_k", "samples_k", 
 ARRAY_KEYS = ("energy_rows", "energy_ref")
 
 
-def write_checkpoint(path, sim, driver_state):
-    """Write the checkpoint of ``sim`` (collective); ``driver_state`` is a JSON-able dict
-    (schedules, frame count, segments: the same on every rank) plus, on rank 0, the
-    driver's arrays under ``arrays``."""
-    comm, s, lay = sim.comm, sim.store, sim.layout
+def write_checkpoint(path, st, ctx, driver_state):
+    """Write the checkpoint of a run's state ``st`` (its context ``ctx``) (collective);
+    ``driver_state`` is a JSON-able dict (schedules, frame count, segments: the same on every
+    rank) plus, on rank 0, the driver's arrays under ``arrays``."""
+    comm, s, lay = ctx.comm, st.store, ctx.layout
     rank0 = comm.rank == 0
     # What rank 0 alone knows: the state's text and the driver arrays' shapes
     meta = None
     if rank0:
         arrays = driver_state.get("arrays", {})
-        state = {"t": sim.t, "nstep": sim.nstep, "dt": sim.dt, "dt_prev": sim.dt_prev}
+        state = {"t": st.t, "nstep": st.nstep, "dt": st.dt, "dt_prev": st.dt_prev}
         state.update({k: v for k, v in driver_state.items() if k != "arrays"})
         meta = (json.dumps(state), {k: (np.shape(a), np.asarray(a).dtype.str)
                                     for k, a in arrays.items()})
     state_text, shapes = comm.bcast(meta, root=0)
     # This rank's rows: the global bodies on rank 0 only, the owned grains everywhere
-    bodies = np.arange(s.nb_own) if rank0 else np.arange(sim.nglobal, s.nb_own)
+    bodies = np.arange(s.nb_own) if rank0 else np.arange(ctx.nglobal, s.nb_own)
     gids = s.gid[bodies]
     nidx, eidx = ranges(s.nstart[bodies], s.nn[bodies]), ranges(s.estart[bodies], s.ne[bodies])
     gn = ranges(lay.node_start[gids], s.nn[bodies])
     ge = ranges(lay.elem_start[gids], s.ne[bodies])
-    extra = {"contact_force": sim.fc} if sim.has_contact else {}
+    extra = {"contact_force": st.fc} if ctx.has_contact else {}
     parts = {}
     for kind, loc, glob, n in ((BODY, bodies, gids, lay.nbody), (NODE, nidx, gn, lay.nnode),
                                (ELEM, eidx, ge, lay.nelem)):
-        cols, table = _columns(s, sim.fields, kind, loc, extra if kind == NODE else {})
+        cols, table = _columns(s, ctx.fields, kind, loc, extra if kind == NODE else {})
         parts[kind] = (cols, to_blocks(comm, glob, table, n), n)
-    hist = _history_blocks(comm, s, sim.nglobal, lay.nbody - sim.nglobal, lay.nbody)
+    hist = _history_blocks(comm, s, ctx.nglobal, lay.nbody - ctx.nglobal, lay.nbody)
     tmp = path + ".part"
     with h5py.File(tmp, "w", driver="mpio", comm=comm) as f:
         f.attrs["format"] = FORMAT
         f.attrs["pdfem_version"] = __version__
-        f.attrs["scene"] = sim.scene.to_toml_string()
-        f.attrs["fields"] = json.dumps([fl.name for fl in sim.fields])
+        f.attrs["scene"] = ctx.scene.to_toml_string()
+        f.attrs["fields"] = json.dumps([fl.name for fl in ctx.fields])
         f.attrs["nranks"] = comm.size
         f.attrs["state"] = state_text
         # Bodies, nodes, elements: each rank its block of every field

@@ -57,24 +57,24 @@ def frame_name(k):
     return f"{k:06d}"
 
 
-def contact_rows(sim):
+def contact_rows(st, ctx):
     """(n, NCOL) float rows of the active contacts this rank counts at the last evaluation
     (none before the first); ids are exact in float64 (below 2^53)."""
-    eff = next((e for e in sim.effects if e.name == "contact"), None)
+    eff = next((e for e in ctx.effects if e.name == "contact"), None)
     last = eff.last if eff is not None else None
     if last is None:
         return np.zeros((0, NCOL))
-    s = sim.store
+    s = st.store
     active, keys, res, elems = last["active"], last["keys"], last["res"], last["elems"]
     body = s.elem_body[elems[:, 0]]
     own = body < s.nb_own
-    if sim.comm.rank != 0:
+    if ctx.comm.rank != 0:
         own &= s.isglobal[body] == 0
     sel = np.nonzero((active == C_ACTIVE) & own)[0]
     dt = last["dt"]
     rate = 1.0 / dt if dt > 0.0 else 0.0
     k, r = keys[sel], res[sel]
-    lay_start = sim.layout.elem_start
+    lay_start = ctx.layout.elem_start
     ga = lay_start[k[:, 0]] + k[:, 1]
     wall = k[:, 2] < 0
     gb = np.where(wall, -1, lay_start[np.where(wall, 0, k[:, 2])] + k[:, 3])

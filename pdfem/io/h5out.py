@@ -47,24 +47,24 @@ def frame_fields(nip, fields):
     return out
 
 
-def field_table(sim):
+def field_table(st, ctx):
     """{name: (node|elem, trailing shape, values(nidx, eidx))} of the run's frame fields: the
     core ones and those of its effects (Effect.frame_fields, Effect.frame_values), laid out
     as :data:`pdfem.io.layout.FRAME_LAYOUT` says."""
-    s = sim.store
+    s = st.store
     values = {
         "x": lambda n, e: s.x[n],
         "v": lambda n, e: s.v[n],
         "stress": lambda n, e: s.sig[e],
         "stress_cell": lambda n, e: s.sig[e].mean(axis=1),
     }
-    for eff in sim.effects:
+    for eff in ctx.effects:
         for name in eff.frame_fields:
-            values[name] = partial(eff.frame_values, sim.state, sim.ctx, name)
+            values[name] = partial(eff.frame_values, st, ctx, name)
     out = {}
     for name, get in values.items():
         per, tail = FRAME_LAYOUT[name]
-        out[name] = (per, tuple(sim.nip if n is None else n for n in tail), get)
+        out[name] = (per, tuple(ctx.nip if n is None else n for n in tail), get)
     return out
 
 
@@ -72,31 +72,31 @@ class RunWriter:
     """Collective writer of frames and the energy series of one run, the frames in segment
     files (:mod:`pdfem.io.segments`) closed at each checkpoint."""
 
-    def __init__(self, path, sim, nframes, fields=("x", "v", "stress"), resume=None):
-        comm = sim.comm
+    def __init__(self, path, st, ctx, nframes, fields=("x", "v", "stress"), resume=None):
+        comm = ctx.comm
         self.comm, self.path = comm, path
-        self.fields = tuple(frame_fields(sim.nip, fields))
+        self.fields = tuple(frame_fields(ctx.nip, fields))
         self.contacts = "contacts" in fields
         self.tmp = path + ".part"
         self.nframes_max = nframes
-        self.nn_tot, self.ne_tot = sim.layout.nnode, sim.layout.nelem
-        table = field_table(sim)
+        self.nn_tot, self.ne_tot = ctx.layout.nnode, ctx.layout.nelem
+        table = field_table(st, ctx)
         self.shapes = {name: ((self.nn_tot,) if kind == "node" else (self.ne_tot,)) + shp
                        for name, (kind, shp, _) in table.items() if name in self.fields}
         # Closed segments as [first frame, count]; the open one's index and first frame
         self.segments, self.f = [], None
         self.seg_first, self.nframe = 0, 0
         self.resumed = False
-        if resume is not None and self._resume(sim, *resume):
+        if resume is not None and self._resume(st, ctx, *resume):
             return
         self._open_segment(0)
-        self._attrs(sim)
-        layout = sim.layout
+        self._attrs(st, ctx)
+        layout = ctx.layout
         # Static mesh description (written by rank 0: it is known to every rank)
         mesh = self.f.create_group("mesh")
         dsets = {name: mesh.create_dataset(name, shp, dt)
                  for name, (shp, dt) in self._mesh_shapes(layout).items()}
-        self._write_mesh(sim, dsets)
+        self._write_mesh(st, ctx, dsets)
 
     def _mesh_shapes(self, layout):
         """{name: (shape, dtype)} of the /mesh datasets."""
@@ -119,14 +119,14 @@ class RunWriter:
                                                  chunks=(1,) + tuple(max(1, n) for n in shp))
         self.seg_first = self.nframe
 
-    def _attrs(self, sim):
+    def _attrs(self, st, ctx):
         f = self.f
-        f.attrs["scene"] = sim.scene.to_toml_string()
-        f.attrs["effects"] = ",".join(sim.effect_names)
+        f.attrs["scene"] = ctx.scene.to_toml_string()
+        f.attrs["effects"] = ",".join(ctx.effect_names)
         f.attrs["pdfem_version"] = __version__
         f.attrs["nranks"] = self.comm.size
 
-    def _resume(self, sim, nframe, segments):
+    def _resume(self, st, ctx, nframe, segments):
         """Continue the segments of a checkpoint: check them, delete the later ones; the
         next frame opens a new segment. Returns False (the caller starts a new run file)
         when the checkpoint lists no segments or segment 0 is gone (a restart into another
@@ -137,7 +137,7 @@ class RunWriter:
             if segments and os.path.exists(self.tmp):
                 where = check_segments(self.tmp, segments, self.shapes,
                                        {k: v[0] for k, v in self._mesh_shapes(
-                                           sim.layout).items()})
+                                           ctx.layout).items()})
             # Segments after the checkpoint's (torn or not) are not part of the run
             stale = {None: len(segments), "fresh": 1}.get(where)
             for name in later_files(self.tmp, stale) if stale is not None else ():
@@ -153,9 +153,9 @@ class RunWriter:
         self.resumed = True
         return True
 
-    def _rows(self, sim):
+    def _rows(self, st, ctx):
         """Global node and element indices of this rank's rows (globals on rank 0 only)."""
-        s, lay = sim.store, sim.layout
+        s, lay = st.store, ctx.layout
         bodies = np.arange(s.nb_own)
         if self.comm.rank != 0:
             bodies = bodies[s.isglobal[: s.nb_own] == 0]
@@ -166,9 +166,9 @@ class RunWriter:
         ge = ranges(lay.elem_start[gids], s.ne[bodies])
         return nidx, eidx, gn, ge
 
-    def _write_mesh(self, sim, dsets):
-        s, lay = sim.store, sim.layout
-        nidx, eidx, gn, ge = self._rows(sim)
+    def _write_mesh(self, st, ctx, dsets):
+        s, lay = st.store, ctx.layout
+        nidx, eidx, gn, ge = self._rows(st, ctx)
         gconn = s.lconn[eidx] + lay.node_start[s.elem_gid[eidx]][:, None]
         for name, idx, rows, n in (("node_body", gn, s.gid[s.node_body[nidx]], self.nn_tot),
                                    ("conn", ge, gconn, self.ne_tot),
@@ -181,13 +181,13 @@ class RunWriter:
         if self.comm.rank == 0:
             dsets["body_kind"][:] = lay.kind
 
-    def write_frame(self, sim):
+    def write_frame(self, st, ctx):
         """Write the frame fields of every body at the current time (collective)."""
         if self.f is None:
             self._open_segment(len(self.segments))
         # A rollback to before the open segment's first frame: it restarts there
         self.seg_first = min(self.seg_first, self.nframe)
-        nidx, eidx, gn, ge = self._rows(sim)
+        nidx, eidx, gn, ge = self._rows(st, ctx)
         k = self.nframe - self.seg_first
         if k >= self.time.shape[0]:
             # Collective: every rank writes every frame, so all resize together
@@ -196,7 +196,7 @@ class RunWriter:
             for d in self.dsets.values():
                 d.resize((cap,) + d.shape[1:])
         # (global rows, local values) of each field, by name
-        table = field_table(sim)
+        table = field_table(st, ctx)
         for name in self.dsets:
             kind, _, values = table[name]
             idx, n = (gn, self.nn_tot) if kind == "node" else (ge, self.ne_tot)
@@ -205,10 +205,10 @@ class RunWriter:
             if hi > lo:
                 d[k, lo:hi] = blk.reshape((hi - lo,) + d.shape[2:])
         if self.contacts:
-            write_contacts(self.comm, self.f, self.nframe, contact_rows(sim))
+            write_contacts(self.comm, self.f, self.nframe, contact_rows(st, ctx))
         # Every rank writes the (same) time: a write by one rank alone can allocate a chunk
         # of a reopened file on that rank only, and the collective close then hangs
-        self.time[k] = sim.t
+        self.time[k] = st.t
         self.nframe += 1
 
     def _cut(self):

@@ -86,7 +86,7 @@ class Checkpointer:
                 arrays["gauge_times"], arrays["gauge_rows"] = t, h
                 arrays["gauge_sets"] = output.gauges.packed()
             state["arrays"] = arrays
-        write_checkpoint(self.path, sim, state)
+        write_checkpoint(self.path, sim.state, sim.ctx, state)
         sim.checkpoint_done()
         self.last = time.perf_counter()
 
@@ -125,5 +125,5 @@ class Checkpointer:
             if sim.comm.rank == 0:
                 output.log(f"pdfem: warning: {writer.tmp} is missing; frames before "
                            f"t={sim.t:.6e} s are not in the new run file, which starts there")
-            writer.write_frame(sim)
+            writer.write_frame(sim.state, sim.ctx)
         return rows, ref

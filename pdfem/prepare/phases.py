@@ -152,7 +152,7 @@ def _run_phase(name, scene, comm, threshold, log, max_steps, where, allow_huge=F
     while sim.t < sim.t_end and sim.nstep < max_steps:
         sim.step()
         if sim.nstep >= MIN_STEPS and sim.nstep % CHECK == 0:
-            terms = global_terms(sim)
+            terms = global_terms(sim.state, sim.ctx)
             ke = broadcast(comm, terms["kinetic"] if comm.rank == 0 else None)
             if ke < threshold:
                 break

@@ -60,10 +60,10 @@ def _compress(tmp_path, extra):
     balance error, viscous term or None when the run has none)."""
     sim = Simulation(parse_scene(stretched_block(end=4e-6, v=-20.0, extra=extra),
                                  str(tmp_path)), MPI.COMM_SELF)
-    ref = global_terms(sim)
+    ref = global_terms(sim.state, sim.ctx)
     while sim.t < sim.t_end:
         sim.step()
-    terms = global_terms(sim)
+    terms = global_terms(sim.state, sim.ctx)
     return balance(terms, ref)[1], terms.get("viscous")
 
 

@@ -19,7 +19,7 @@ from tests.scenes import settling_bed
 
 def _quanta(sim):
     """Each term's quantum, from the largest magnitude over every body (as the check does)."""
-    rows = body_terms(sim)
+    rows = body_terms(sim.state, sim.ctx)
     top = np.abs(rows).max(axis=0) if rows.shape[0] else np.zeros(len(sim.terms))
     gtop = np.empty_like(top)
     sim.comm.Allreduce(top, gtop, op=MPI.MAX)
@@ -34,15 +34,15 @@ def test_fixed_point_terms_match_one_rank_bit_for_bit(tmp_path):
     doc = settling_bed(n=60, cols=10, partition="strips")
     par = Simulation(parse_scene(doc, str(tmp_path)), comm)
     ser = Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF)
-    ref = comm.bcast(global_terms(par), root=0)
+    ref = comm.bcast(global_terms(par.state, par.ctx), root=0)
     n = par.layout.nbody
     for _ in range(4):
         for _ in range(300):
             par.step()
             ser.step()
-        a, b = fixed_point_terms(par), fixed_point_terms(ser)
+        a, b = fixed_point_terms(par.state, par.ctx), fixed_point_terms(ser.state, ser.ctx)
         assert_all(comm, a == b, f"rank {comm.rank} step {par.nstep}: {a} != {b}")
-        exact = comm.bcast(global_terms(par), root=0)
+        exact = comm.bcast(global_terms(par.state, par.ctx), root=0)
         q = _quanta(par)
         off = [t for i, t in enumerate(par.terms)
                if not abs(a[t] - exact[t]) <= 0.5 * n * q[i] + 1e-15 * abs(exact[t])]

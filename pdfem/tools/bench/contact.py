@@ -102,7 +102,7 @@ def _drift_check_s(sim, repeat):
     times = []
     for _ in range(max(repeat, 3)):
         t0 = time.perf_counter()
-        fixed_point_terms(sim)
+        fixed_point_terms(sim.state, sim.ctx)
         times.append(time.perf_counter() - t0)
     return statistics.median(times)
 

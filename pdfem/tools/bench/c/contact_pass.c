@@ -80,6 +80,36 @@ static double damped_traction(double tn, double kt, double rate, double meff, do
     return MAX(tn + 2.0 * zeta * sqrt(meff * kt / length) / gn * rate, 0.0);
 }
 
+/* overlap.classify: area and centroid of the clipped polygon (kc vertices, fanned from the
+   first); returns 0 and leaves them untouched when it has fewer than 3 vertices or no area */
+static int polygon_area(const double *px, const double *py, int kc, double *area, double *cx,
+                        double *cy) {
+    double a2 = 0.0, sx = 0.0, sy = 0.0;
+    for (int i = 1; i < kc - 1; i++) {
+        double ux = px[i] - px[0], uy = py[i] - py[0];
+        double vx = px[i + 1] - px[0], vy = py[i + 1] - py[0];
+        double cr = ux * vy - uy * vx;
+        a2 += cr; sx += cr * (ux + vx); sy += cr * (uy + vy);
+    }
+    if (kc >= 3 && a2 != 0.0) {
+        *area = 0.5 * a2;
+        *cx = px[0] + sx / (3.0 * a2);
+        *cy = py[0] + sy / (3.0 * a2);
+        return 1;
+    }
+    return 0;
+}
+
+/* The sliver test's scale: the larger side of element a's box, squared */
+static double box_extent2(const double xa[4][2]) {
+    double ex = MAX(MAX(MAX(xa[0][0], xa[1][0]), xa[2][0]), xa[3][0])
+        - MIN(MIN(MIN(xa[0][0], xa[1][0]), xa[2][0]), xa[3][0]);
+    double ey = MAX(MAX(MAX(xa[0][1], xa[1][1]), xa[2][1]), xa[3][1])
+        - MIN(MIN(MIN(xa[0][1], xa[1][1]), xa[2][1]), xa[3][1]);
+    double ee = MAX(ex, ey);
+    return ee * ee;
+}
+
 static int key_less(int64_t h0, int64_t h1, int64_t h2, int64_t h3, int64_t k0, int64_t k1,
                     int64_t k2, int64_t k3) {
     if (h0 != k0) return h0 < k0;
@@ -188,27 +218,11 @@ int64_t contact_pass_c(const double *x, const double *du, const double *m, const
             }
             kc = (int)k;
             /* overlap.classify: area, sliver, crossing chord */
-            double a2 = 0.0, sx = 0.0, sy = 0.0;
-            for (int i = 1; i < kc - 1; i++) {
-                double ux = px[0][i] - px[0][0], uy = py[0][i] - py[0][0];
-                double vx = px[0][i + 1] - px[0][0], vy = py[0][i + 1] - py[0][0];
-                double cr = ux * vy - uy * vx;
-                a2 += cr; sx += cr * (ux + vx); sy += cr * (uy + vy);
-            }
-            if (kc >= 3 && a2 != 0.0) {
-                area = 0.5 * a2;
-                cx = px[0][0] + sx / (3.0 * a2);
-                cy = py[0][0] + sy / (3.0 * a2);
-            } else if (kc >= 3) {
+            if (!polygon_area(px[0], py[0], kc, &area, &cx, &cy) && kc >= 3) {
                 cx = px[0][0];
                 cy = py[0][0];
             }
-            double ex = MAX(MAX(MAX(xa[0][0], xa[1][0]), xa[2][0]), xa[3][0])
-                - MIN(MIN(MIN(xa[0][0], xa[1][0]), xa[2][0]), xa[3][0]);
-            double ey = MAX(MAX(MAX(xa[0][1], xa[1][1]), xa[2][1]), xa[3][1])
-                - MIN(MIN(MIN(xa[0][1], xa[1][1]), xa[2][1]), xa[3][1]);
-            double ee = MAX(ex, ey);
-            if (area <= SLIVER * (ee * ee)) {
+            if (area <= SLIVER * box_extent2(xa)) {
                 st = OV_NONE;
             } else {
                 int ncr = 0;
@@ -319,24 +333,8 @@ int64_t contact_pass_c(const double *x, const double *du, const double *m, const
                 if (kc < 0) {
                     st = OV_OVERFLOW;
                 } else {
-                    double a2 = 0.0, sx = 0.0, sy = 0.0;
-                    for (int i = 1; i < kc - 1; i++) {
-                        double ux = px[0][i] - px[0][0], uy = py[0][i] - py[0][0];
-                        double vx = px[0][i + 1] - px[0][0], vy = py[0][i + 1] - py[0][0];
-                        double cr = ux * vy - uy * vx;
-                        a2 += cr; sx += cr * (ux + vx); sy += cr * (uy + vy);
-                    }
-                    if (kc >= 3 && a2 != 0.0) {
-                        area = 0.5 * a2;
-                        cx = px[0][0] + sx / (3.0 * a2);
-                        cy = py[0][0] + sy / (3.0 * a2);
-                    }
-                    double ex = MAX(MAX(MAX(xa[0][0], xa[1][0]), xa[2][0]), xa[3][0])
-                        - MIN(MIN(MIN(xa[0][0], xa[1][0]), xa[2][0]), xa[3][0]);
-                    double ey = MAX(MAX(MAX(xa[0][1], xa[1][1]), xa[2][1]), xa[3][1])
-                        - MIN(MIN(MIN(xa[0][1], xa[1][1]), xa[2][1]), xa[3][1]);
-                    double ee = MAX(ex, ey);
-                    if (area <= SLIVER * (ee * ee)) {
+                    polygon_area(px[0], py[0], kc, &area, &cx, &cy);
+                    if (area <= SLIVER * box_extent2(xa)) {
                         st = OV_NONE;
                     } else {
                         int first = -1, two = 0;

@@ -30,12 +30,11 @@ class Context:
         self.heat = sim.heat
         # The scene and what it makes of a run: the global layout of bodies, nodes and
         # elements (pdfem.build.Layout), the store's fields, integration points, the active
-        # effects, the energy terms, whether contact forces exist, the end time and step cap
+        # effects, the energy terms, whether contact forces exist
         self.scene, self.layout, self.fields, self.nip = sim.scene, sim.layout, sim.fields, \
             sim.nip
         self.effects, self.effect_names, self.terms = sim.effects, sim.effect_names, sim.terms
-        self.has_contact, self.t_end, self.max_steps = sim.has_contact, sim.t_end, sim.max_steps
-        self.mat_ids = sim.mat_ids
+        self.has_contact = sim.has_contact
         # The hourglass coefficient of the 1-point rule (0 for 2x2)
         self.hg_coef = sim.hg_coef
 
@@ -48,11 +47,6 @@ class Context:
     def safety(self):
         """The present time.safety (the time-step remedy halves it)."""
         return self._sim.safety
-
-    @property
-    def energy_floor(self):
-        """The energy balance's smallest scale (pdfem.energy.energy_floor), once set up."""
-        return self._sim.energy_floor
 
     def fail(self, msg):
         """Record a failed check; every rank stops at the end of the step."""

@@ -206,19 +206,22 @@ class Simulation:
         else:
             with self.timers.phase("halo"):
                 self.halo.refresh([getattr(st.store, n) for n in self.halo_fields])
-        # Step increments of ghosts are derived exactly as their owners computed them
-        st.du = st.dt * st.store.v
+        # Step increments of ghosts are derived exactly as their owners computed them (in
+        # place: no array made per step)
+        np.multiply(st.store.v, st.dt, out=st.du)
 
     def restore(self, last):
         """Back to a last good state of the guards (:class:`pdfem.guards.LastGood`)
         (collective): the state of its snapshot with the ghosts rebuilt on its cell owners,
         the effects told, the reductions redone."""
         self.owner = last.owner.copy()
-        st = State.from_snapshot(last.state, self.has_contact)
+
+        def ghosts(store):
+            store, self.halo = self.rebuild(store)
+            return store
+
         with self.timers.phase("migration"):
-            store, self.halo = self.rebuild(st.store)
-        st.new_store(store)
-        self.state = st
+            self.state = st = State.from_snapshot(last.state, self.has_contact, ghosts)
         self._fail_msg = ""
         self.stop_requested = False
         for eff in self.effects:

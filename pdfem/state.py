@@ -9,8 +9,8 @@ bodies' kinetic energies kin). The per-step arrays are made in one place,
 state; effects, guards and io read it (and add into the force arrays in their hooks).
 
 A :class:`Snapshot` is the state at the end of a step that passed every check: the owned
-bodies (with their contact history) and the scalars. :meth:`State.from_snapshot` rebuilds a
-state from it (the stepper then rebuilds the ghosts), as a restart from a checkpoint would.
+bodies (with their contact history) and the scalars. :meth:`State.from_snapshot` makes a
+state of it, with the ghosts rebuilt, as a restart from a checkpoint would.
 """
 
 import numpy as np
@@ -64,9 +64,9 @@ class State:
         return Snapshot(self)
 
     @classmethod
-    def from_snapshot(cls, snap, contact):
-        """The state of a snapshot: its owned bodies (no ghosts yet), time and step lengths,
-        per-step arrays fresh."""
-        st = cls(Store(snap.fields, snap.batch, snap.nb_own), contact)
+    def from_snapshot(cls, snap, contact, rebuild):
+        """The state of a snapshot: its owned bodies with the ghosts ``rebuild`` (a function
+        of the owned store) makes, its time and step lengths, per-step arrays fresh."""
+        st = cls(rebuild(Store(snap.fields, snap.batch, snap.nb_own)), contact)
         st.t, st.nstep, st.dt, st.dt_prev = snap.t, snap.nstep, snap.dt, snap.dt_prev
         return st

@@ -11,7 +11,7 @@ from pdfem.kernels import params as P
 from pdfem.kernels.cap import CAP_NST, cap_check_params
 from pdfem.kernels.integrate import NACC
 from pdfem.mesh.block import block_mesh
-from pdfem.mesh.ellipse import ellipse_mesh
+from pdfem.mesh.grain import grain_mesh
 from pdfem.store import Batch
 
 # Scene names of the material models
@@ -29,6 +29,8 @@ def material_table(materials):
         table[i, P.RHO] = tbl["density"]
         table[i, P.BULK] = tbl["bulk"]
         table[i, P.SHEAR] = tbl["shear"]
+        if tbl.get("eos") == "us_up":
+            table[i, P.EOS_S] = tbl["eos_s"]
         for key, col in CAP_KEYS.items():
             if key in tbl:
                 table[i, col] = tbl[key]
@@ -85,9 +87,10 @@ def _batch(fields, nip, nst, gid, nn, ne, isglobal, x, v, lconn, emat, ebnd):
     return Batch(fields, arrays)
 
 
-def grain_batch(fields, nip, nst, level, gids, center, axes, angle, velocity, mat):
-    """Meshed elliptic grains (6*level^2 quads each), placed and rotated, as one batch."""
-    ref, conn, _ = ellipse_mesh(1.0, 1.0, level)
+def grain_batch(fields, nip, nst, level, gids, center, axes, angle, velocity, mat, mesh="kite"):
+    """Meshed elliptic grains (``mesh`` at ``level``: pdfem.mesh.grain), placed and rotated,
+    as one batch."""
+    ref, conn, _ = grain_mesh(1.0, 1.0, level, mesh)
     ng, nn, ne = gids.shape[0], ref.shape[0], conn.shape[0]
     # Scale the unit-disc mesh to each ellipse, rotate, translate
     loc = ref[None, :, :] * axes[:, None, :]
@@ -157,8 +160,8 @@ def apply_bcs(batch, bcs, box, block_names, block_sets, nglobal_first_node):
 class Layout:
     """Global numbering of bodies, nodes and elements (by gid), known to every rank."""
 
-    def __init__(self, ngrain, level, blocks):
-        _, conn, _ = ellipse_mesh(1.0, 1.0, level)
+    def __init__(self, ngrain, level, blocks, mesh="kite"):
+        _, conn, _ = grain_mesh(1.0, 1.0, level, mesh)
         gnn = int(conn.max()) + 1
         nn = np.array([gnn] * ngrain + [(b["nx"] + 1) * (b["ny"] + 1) for b in blocks],
                       np.int64)

@@ -24,11 +24,13 @@ ADVICE = {
     "non-finite": ("a smaller time.safety, guards.dt_retries", "[bulk_viscosity]"),
     "inverted element": ("a smaller time.safety, guards.dt_retries",
                          "[bulk_viscosity], contact.damping, another grain mesh "
-                         "(element.level, element.rule)"),
+                         "(element.mesh, element.level, element.rule), an equation of state "
+                         "for a crystal at GPa (eos)"),
     "contact overlap": ("a smaller time.safety, guards.dt_retries",
                         "[bulk_viscosity], contact.damping, a stiffer contact (contact.kn0) or a "
-                        "larger contact.delta_max, another grain mesh (element.level, "
-                        "element.rule)"),
+                        "larger contact.delta_max, another grain mesh (element.mesh, "
+                        "element.level, element.rule), an equation of state for a crystal at "
+                        "GPa (eos)"),
     "time step": ("a smaller time.dt_min",
                   "[bulk_viscosity], contact.damping, guards.cap_contact where the contact "
                   "stiffness is a numerical penalty"),

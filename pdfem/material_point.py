@@ -21,6 +21,7 @@ from pdfem.kernels.cap import (
     cap_initial_state,
     cap_update,
 )
+from pdfem.kernels.eos import eos_row
 from pdfem.scene import schema as S
 
 COLUMNS = ("step", "exx", "eyy", "exy", "ezz", "sxx", "syy", "sxy", "szz", "I1", "sqrtJ2",
@@ -37,7 +38,10 @@ CAP_KEYS = {"density": P.RHO, "bulk": P.BULK, "shear": P.SHEAR, "A": P.CAP_A, "B
 CAP_OPTIONAL = ("tension_cutoff", "tol")
 # Keys a scene's cap material may hold that this isothermal driver does not use (thermal and
 # temperature-dependence keys): the scene schema's keys of the cap model less the ones above
-IGNORED_KEYS = tuple(k for k in (*S.MATERIAL_COMMON, *S.CAP) if k != "model" and k not in CAP_KEYS)
+# The equation of state's keys, which the driver applies (pdfem.kernels.eos)
+EOS_KEYS = ("eos", "eos_s")
+IGNORED_KEYS = tuple(k for k in (*S.MATERIAL_COMMON, *S.CAP)
+                     if k != "model" and k not in CAP_KEYS and k not in EOS_KEYS)
 
 
 def _number(tbl, key, where):
@@ -63,7 +67,8 @@ def cap_params_from_table(tbl, where="materials.NAME", strict=True):
         raise InputError(f"{where}.model: expected \"cap\" (got {tbl.get('model')!r})")
     if strict:
         for key in tbl:
-            if key != "model" and key not in CAP_KEYS and key not in IGNORED_KEYS:
+            if key != "model" and key not in CAP_KEYS and key not in IGNORED_KEYS \
+                    and key not in EOS_KEYS:
                 raise InputError(f"{where}.{key}: unknown key for model \"cap\"")
     for key in CAP_KEYS:
         if key not in CAP_OPTIONAL and key not in tbl:
@@ -90,12 +95,26 @@ def cap_params_from_table(tbl, where="materials.NAME", strict=True):
         p[P.CAP_T] = math.log(p[P.CAP_A] / c) / b if b > 0.0 and c > 0.0 else 0.0
     if "tol" in tbl and not 0.0 < p[P.CAP_TOL] < 1e-2:
         raise InputError(f"{where}.tol: must be in (0, 1e-2) (got {p[P.CAP_TOL]:g})")
+    _eos_into(tbl, where, p)
     reason = cap_check_params(p)
     if reason:
         key = "tension_cutoff" if "tension" in reason else "kappa0" if "X(kappa0)" in reason \
             else "A"
         raise InputError(f"{where}.{key}: {reason}")
     return p
+
+
+def _eos_into(tbl, where, p):
+    """The Us-up equation of state of the table into the row (eos_s exactly with it)."""
+    eos = tbl.get("eos", "linear")
+    if eos not in ("linear", "us_up"):
+        raise InputError(f'{where}.eos: must be "linear" or "us_up" (got {eos!r})')
+    if (eos == "us_up") != ("eos_s" in tbl):
+        raise InputError(f'{where}.eos_s: given exactly when eos = "us_up"')
+    if eos == "us_up":
+        p[P.EOS_S] = _number(tbl, "eos_s", where)
+        if not 0.0 < p[P.EOS_S] <= 10.0:
+            raise InputError(f"{where}.eos_s: must be in (0, 10] (got {p[P.EOS_S]:g})")
 
 
 def named_path(name, strain=-0.01, axial=None):
@@ -160,6 +179,7 @@ def _update(p, sig, st, d):
     """cap_update on copies; returns (sig, st, status, dwp)."""
     s = sig.copy()
     t = st.copy()
+    p = eos_row(p, s[0], s[1], s[3], d[0] + d[1] + d[3], np.empty(p.shape[0]))
     status, dwp = cap_update(p, s, d, t)
     return s, t, status, dwp
 

@@ -48,7 +48,8 @@ def initial_bodies(sim, scene, init_state):
     nst = sim.nst
     grains = build.grain_batch(sim.fields, sim.nip, nst, r["element"]["level"],
                                mine.astype(np.int64), g["center"][mine], g["axes"][mine],
-                               g["angle"][mine], g["velocity"][mine], g["material"][mine])
+                               g["angle"][mine], g["velocity"][mine], g["material"][mine],
+                               r["element"]["mesh"])
     if "nodes" in g:
         # A prepared bed: the grain meshes as the preparation left them
         grains.a["x"] = g["nodes"][mine].reshape(-1, 2).copy()

@@ -86,7 +86,7 @@ class Simulation:
         self.safety, self.t_end = tm["safety"], tm["end"]
         self.dt_max, self.dt_min, self.max_steps = tm["dt_max"], tm["dt_min"], tm["max_steps"]
         self.layout = build.Layout(scene.grains["center"].shape[0], el["level"],
-                                   r.get("blocks", []))
+                                   r.get("blocks", []), el["mesh"])
         self.has_contact = "contact" in r
         self.rebalances = 0
         self.restarted = restart is not None
@@ -321,7 +321,7 @@ class Simulation:
     def next_dt(self):
         """Global stable step times the safety factor, clipped to the next event; guards."""
         s = self.store
-        dt_loc = q4_stable_dt(s.x, s.conn, s.emat, self.mat_params, 0, s.ne_own)
+        dt_loc = q4_stable_dt(s.x, s.conn, s.emat, self.mat_params, s.sig, 0, s.ne_own)
         limiter = "the element wave speed"
         for eff in self.hooks["stable_dt"]:
             d = eff.stable_dt(self.state, self.ctx)

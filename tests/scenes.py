@@ -266,3 +266,32 @@ def small_shock(bed, out="shock.h5", plots="none"):
     doc["output"]["path"] = out
     doc["shock"]["plots"] = plots
     return doc
+
+
+def crystal_column(up, out="c.h5", height=3.0e-3, ny=300, c0=2770.0, s=2.29, rule="1pt",
+                   eos=True):
+    """A column of crystal (HMX's density, Us = c0 + s up) in uniaxial strain: the bottom
+    fixed, every node held in x, the top nodes driven down at ``up`` from t = 0 against
+    material at rest, with bulk viscosity; shear modulus a thousandth of the bulk (a fluid
+    to the Hugoniot's accuracy). Runs for 0.8 of the time the shock needs to cross it."""
+    rho = 1900.0
+    k0 = rho * c0 * c0
+    width = 1.0e-4
+    end = 0.8 * height / (c0 + s * up)
+    hmx = {"model": "elastic", "density": rho, "bulk": k0, "shear": 1.0e-3 * k0}
+    if eos:
+        hmx.update(eos="us_up", eos_s=s)
+    return {
+        "domain": {"box": [0.0, 0.0, width, height]},
+        "time": {"end": end, "safety": 0.5},
+        "element": {"rule": rule},
+        "bulk_viscosity": {},
+        "materials": {"hmx": hmx},
+        "blocks": [{"name": "col", "box": [0.0, 0.0, width, height], "nx": 1, "ny": ny,
+                    "material": "hmx"}],
+        "bc": [{"body": "col", "nodes": "bottom", "type": "fixed"},
+               {"body": "col", "nodes": "top", "type": "velocity", "velocity": [0.0, -up]},
+               {"body": "col", "nodes": "all", "type": "velocity", "dof": "x",
+                "velocity": [0.0, 0.0]}],
+        "output": {"path": out, "interval": end / 80, "energy_interval": end / 80},
+    }

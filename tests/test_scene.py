@@ -88,7 +88,7 @@ def test_minimal_scene_defaults(tmp_path, monkeypatch):
     r = s.resolved
     assert r["time"] == {"end": 1e-5, "safety": 0.5, "dt_max": math.inf, "dt_min": 0.0,
                          "max_steps": 0}
-    assert r["element"] == {"rule": "1pt", "hourglass": 0.05, "level": 1}
+    assert r["element"] == {"rule": "1pt", "hourglass": 0.05, "level": 1, "mesh": "kite"}
     assert r["materials"]["glass"]["model"] == "elastic"
     assert r["grains"][0]["angle"] == 0.0 and r["grains"][0]["velocity"] == [0.0, 0.0]
     # Auto skin = 0.1 x smallest minor diameter; auto cell = largest diameter + skin

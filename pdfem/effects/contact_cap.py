@@ -26,7 +26,8 @@ def contact_stiffness_cap(st, ctx, contact, kcap=None):
     s, n = st.store, st.store.ne_own
     if kcap is not None:
         return kcap, _apply_cap(contact, kcap, None)
-    dt_el = global_min(ctx.comm, q4_stable_dt(s.x, s.conn, s.emat, ctx.mat_params, 0, n))
+    dt_el = global_min(ctx.comm, q4_stable_dt(s.x, s.conn, s.emat, ctx.mat_params, s.sig,
+                                                   0, n))
     # Stiffness limit of each boundary edge: contact_dt(m, rigid, k L) >= dt_el
     kcap = math.inf
     for k in range(4):

@@ -24,14 +24,16 @@ class BulkViscosity(Effect):
     def body_force(self, st, ctx):
         s = st.store
         with ctx.timers.phase("elements"):
-            bulk_viscosity_forces(s.x, st.du, s.conn, s.emat, ctx.mat_params, 0, s.ne_own,
+            bulk_viscosity_forces(s.x, st.du, s.conn, s.emat, ctx.mat_params, s.sig, 0, s.ne_own,
                                   st.dt, self.c_quad, self.c_lin, s.qv, s.ewq,
                                   st.f)
 
     def stable_dt(self, st, ctx):
         s = st.store
-        return bulk_viscosity_dt(s.x, st.du, s.conn, s.emat, ctx.mat_params, 0, s.ne_own,
-                                 st.dt, self.c_quad, self.c_lin)
+        # Before the first step: the rate of the initial velocities
+        v = s.v if st.nstep == 0 else np.zeros((0, 2))
+        return bulk_viscosity_dt(s.x, st.du, s.conn, s.emat, ctx.mat_params, s.sig, 0, s.ne_own,
+                                 st.dt, self.c_quad, self.c_lin, v)
 
     def dt_limiter(self, st, ctx, dt):
         return "the element wave speed with bulk viscosity"

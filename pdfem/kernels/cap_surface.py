@@ -184,7 +184,9 @@ def dilate_kappa(p, kap, depv, lim, xa):
             hi = k
         else:
             lo = k
-        kn = k - r / hard_dh(p, k, xa)
+        # A slope that underflows (H far down its exponential) bisects instead
+        dh = hard_dh(p, k, xa)
+        kn = k - r / dh if dh > 0.0 else 0.5 * (lo + hi)
         if not (lo <= kn <= hi):
             kn = 0.5 * (lo + hi)
         if abs(kn - k) <= 1e-15 * (abs(k) + p[CAP_R] * p[CAP_A]):
@@ -211,7 +213,8 @@ def corner_kappa(p, i1t, kap, xa, kb):
             hi = k
         else:
             lo = k
-        kn = k - r / (hard_dh(p, k, xa) + 1.0 / (3.0 * kb))
+        dh = hard_dh(p, k, xa) + 1.0 / (3.0 * kb)
+        kn = k - r / dh if dh > 0.0 else 0.5 * (lo + hi)
         if not (lo <= kn <= hi):
             kn = 0.5 * (lo + hi)
         if abs(kn - k) <= 1e-15 * (abs(k) + p[CAP_R] * p[CAP_A]):

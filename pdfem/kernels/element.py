@@ -20,8 +20,9 @@ there, leaving that element partly updated (the run must then abort).
 import numpy as np
 from numba import njit
 
+from pdfem.kernels.eos import eos_row
 from pdfem.kernels.material import material_update, softened
-from pdfem.kernels.params import ALPHA, BULK, SHEAR, SOFT_K, SOFT_Y
+from pdfem.kernels.params import ALPHA, BULK, EOS_S, SHEAR, SOFT_K, SOFT_Y
 
 GP = 0.5773502691896257  # 1/sqrt(3), 2x2 Gauss abscissa
 XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
@@ -109,13 +110,14 @@ def _grad(ue, dx, dy):
 
 
 @njit(cache=True)
-def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold):
+def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold, ebuf):
     """Objective update of one point stress s (4,).
 
     (gxx, gxy, gyx, gyy) is the mid-step gradient of du, (c, sn) the Cayley rotation of its
     skew part, dth the isotropic thermal strain increment (removed from the material's
-    strain, sigma_zz included). Returns (status, dwp, mechanical work density, thermal-strain
-    work density sigma:deps_th).
+    strain, sigma_zz included); ebuf receives the row of a material with an equation of
+    state (eos.eos_row). Returns (status, dwp, mechanical work density, thermal-strain work
+    density sigma:deps_th).
     """
     # Rotate the stress, Q sig Q^T with Q = [[c, sn], [-sn, c]]
     sxx = s[0]
@@ -131,6 +133,8 @@ def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold):
     deps[3] = -dth
     for k in range(4):
         sold[k] = s[k]
+    if p[EOS_S] > 0.0:
+        p = eos_row(p, s[0], s[1], s[3], deps[0] + deps[1] + deps[3], ebuf)
     status, dwp = material_update(p, s, deps, st)
     # Stress power density, trapezoidal in time
     w = 0.5 * ((sold[0] + s[0]) * deps[0] + (sold[1] + s[1]) * deps[1]
@@ -198,6 +202,7 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
     sold = np.empty(4)
     nost = np.zeros(0)
     pbuf = np.empty(mat_params.shape[1])
+    ebuf = np.empty(mat_params.shape[1])
     has_state = mstate.shape[0] > 0
     has_th = eth.shape[0] > 0
     for e in range(e0, e1):
@@ -217,10 +222,10 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, 
             s = sig[e, ip]
             if has_state:
                 status, dwp, w, wth = _stress_point(p, s, mstate[e, ip], gxx, gxy, gyx, gyy,
-                                                    c, sn, dth, deps, sold)
+                                                    c, sn, dth, deps, sold, ebuf)
             else:
                 status, dwp, w, wth = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn,
-                                                    dth, deps, sold)
+                                                    dth, deps, sold, ebuf)
             if status != 0:
                 return e
             # Forces and work with the current gradients and volume

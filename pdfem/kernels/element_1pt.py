@@ -18,7 +18,8 @@ the elastic trial and its yield value exactly as ``cap.cap_update`` computes the
 the plastic return only when the trial is outside; an elastic point takes the elastic
 increment. With thermal coupling (eth of shape (ne, 3)) the material row may be softened
 with the element temperature and the thermal strain is taken out of the material's strain
-(pdfem.kernels.element.thermal_row). Sign convention: tension positive.
+(pdfem.kernels.element.thermal_row); a material with an equation of state takes its bulk
+modulus at the step's pressure (pdfem.kernels.eos). Sign convention: tension positive.
 """
 
 import math
@@ -30,7 +31,8 @@ from pdfem.kernels.cap import _plastic_update
 from pdfem.kernels.cap_surface import yield_value
 from pdfem.kernels.elastic import elastic_increment
 from pdfem.kernels.element import thermal_row
-from pdfem.kernels.params import BULK, CAP, ELASTIC, MODEL, SHEAR
+from pdfem.kernels.eos import eos_row
+from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_S, MODEL, SHEAR
 
 
 @njit(cache=True)
@@ -71,6 +73,7 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1,
         raise ValueError("q4_forces_1pt needs sig of shape (ne, 1, 4)")
     has_hg = hgq.shape[0] > 0
     pbuf = np.empty(mat_params.shape[1])
+    ebuf = np.empty(mat_params.shape[1])
     for e in range(e0, e1):
         p = mat_params[emat[e]]
         dth = 0.0
@@ -112,6 +115,9 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1,
         r2 = c * sn * (syy - sxx) + (c * c - sn * sn) * sxy
         r3 = s[3]
         d0, d1, d2, d3 = gxx - dth, gyy - dth, 0.5 * (gxy + gyx), -dth
+        # A material with an equation of state: its bulk modulus over the step
+        if p[EOS_S] > 0.0:
+            p = eos_row(p, r0, r1, r3, d0 + d1 + d3, ebuf)
         dwp = 0.0
         model = int(p[MODEL])
         if model == CAP:

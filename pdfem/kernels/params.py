@@ -35,3 +35,6 @@ BETA = 19  # fraction of plastic work turned into heat [-]
 T_REF = 20  # reference temperature [K]
 SOFT_K = 21  # moduli softening per kelvin: K(T) = K (1 - SOFT_K (T - T_REF)) [1/K]
 SOFT_Y = 22  # strength softening per kelvin (scales A, C) [1/K]
+
+# Equation of state (pdfem.kernels.eos)
+EOS_S = 23  # slope s of the linear Us-up Hugoniot of the bulk response; 0: linear bulk [-]

@@ -2,7 +2,8 @@
 
 For element e:  dt_e = L_e / c_p  with
     L_e = A_e / max(|x_3 - x_1|, |x_4 - x_2|)   (area over the longest diagonal),
-    c_p = sqrt((K + 4G/3) / rho)                 (plane-strain P-wave speed, table density).
+    c_p = sqrt((K + 4G/3) / rho)                 (plane-strain P-wave speed, table density;
+                                                 K at the element's pressure with an EOS).
 A unit square gives L_e = 1/sqrt(2). The value carries no safety factor: the caller applies
 its Courant number. The table density rho0 is used (no current volume is kept), which is
 conservative under compression.
@@ -11,7 +12,7 @@ conservative under compression.
 import numpy as np
 from numba import njit
 
-from pdfem.kernels.params import BULK, RHO, SHEAR
+from pdfem.kernels.eos import wave_speed
 
 
 @njit(cache=True)
@@ -33,8 +34,11 @@ def element_length(x, conn, e):
 
 
 @njit(cache=True)
-def q4_stable_dt(x, conn, emat, mat_params, e0, e1):
+def q4_stable_dt(x, conn, emat, mat_params, sig, e0, e1):
     """Min over elements [e0, e1) of L_e / c_p (see module docstring); +inf if the range is empty.
+
+    sig (ne, nip, 4): the elements' stresses, whose pressures set the bulk modulus of a
+    material with an equation of state (pdfem.kernels.eos.wave_speed).
 
     An element with non-positive area gives 0.0, so a caller's dt guard trips on it.
     """
@@ -44,7 +48,6 @@ def q4_stable_dt(x, conn, emat, mat_params, e0, e1):
         if a <= 0.0:
             return 0.0
         # P-wave speed of the element's material
-        p = mat_params[emat[e]]
-        cp = np.sqrt((p[BULK] + 4.0 * p[SHEAR] / 3.0) / p[RHO])
+        cp = wave_speed(mat_params[emat[e]], sig, e)
         dt = min(dt, le / cp)
     return dt

@@ -16,12 +16,18 @@ matches central differences (a force at t_n works over [t_{n-1/2}, t_{n+1/2}]):
 
 which the energy balance counts as dissipated. The stable step is reduced with the usual
 bound dt_e = L_e / (Q + sqrt(Q^2 + c^2)), Q = c_lin c + c_quad L |rate| while compressing.
+Before the first step there is no area change yet; the bound of the first step takes the
+rate of the initial velocities, (dA/dt) / A with dA/dt the derivative of the area along them
+(zero, exactly, for a body that moves rigidly in translation), so that a velocity condition
+that starts nodes moving against material at rest (an impulsive start) gets a first step as
+short as the ones that follow it.
 """
 
 import numpy as np
 from numba import njit
 
-from pdfem.kernels.params import BULK, RHO, SHEAR
+from pdfem.kernels.eos import wave_speed
+from pdfem.kernels.params import RHO
 from pdfem.kernels.stable import element_length
 
 
@@ -51,8 +57,8 @@ def _rate(a, a_old, dt):
 
 
 @njit(cache=True)
-def bulk_viscosity_forces(x, du, conn, emat, mat_params, e0, e1, dt, c_quad, c_lin, qv, ewq,
-                          f):
+def bulk_viscosity_forces(x, du, conn, emat, mat_params, sig, e0, e1, dt, c_quad, c_lin, qv,
+                          ewq, f):
     """Viscous pressures of elements [e0, e1) (stored in qv), their forces added to f and
     their work added to ewq (module docstring)."""
     for e in range(e0, e1):
@@ -62,7 +68,7 @@ def bulk_viscosity_forces(x, du, conn, emat, mat_params, e0, e1, dt, c_quad, c_l
         if rate < 0.0:
             p = mat_params[emat[e]]
             rho = p[RHO]
-            c = np.sqrt((p[BULK] + 4.0 * p[SHEAR] / 3.0) / rho)
+            c = wave_speed(p, sig, e)
             le = np.sqrt(a)
             q = rho * (c_quad * le * le * rate * rate - c_lin * c * le * rate)
         ewq[e] += 0.5 * (qv[e] + q) * (a_old - a)
@@ -79,18 +85,42 @@ def bulk_viscosity_forces(x, du, conn, emat, mat_params, e0, e1, dt, c_quad, c_l
 
 
 @njit(cache=True)
-def bulk_viscosity_dt(x, du, conn, emat, mat_params, e0, e1, dt, c_quad, c_lin):
+def _velocity_rate(x, v, conn, e):
+    """(dA/dt) / A of element e along the nodal velocities v (0 for a degenerate element)."""
+    n1 = conn[e, 0]
+    n2 = conn[e, 1]
+    n3 = conn[e, 2]
+    n4 = conn[e, 3]
+    d1x, d1y = x[n3, 0] - x[n1, 0], x[n3, 1] - x[n1, 1]
+    d2x, d2y = x[n4, 0] - x[n2, 0], x[n4, 1] - x[n2, 1]
+    a = 0.5 * (d1x * d2y - d2x * d1y)
+    if a <= 0.0:
+        return 0.0
+    # Diagonals' rates: zero for a uniform velocity
+    w1x, w1y = v[n3, 0] - v[n1, 0], v[n3, 1] - v[n1, 1]
+    w2x, w2y = v[n4, 0] - v[n2, 0], v[n4, 1] - v[n2, 1]
+    return 0.5 * (w1x * d2y + d1x * w2y - w2x * d1y - d2x * w1y) / a
+
+
+@njit(cache=True)
+def bulk_viscosity_dt(x, du, conn, emat, mat_params, sig, e0, e1, dt, c_quad, c_lin, v):
     """Smallest stable step of elements [e0, e1) with their viscosity (module docstring);
-    +inf when none is compressing."""
+    +inf when none is compressing. v (nn, 2): the velocities whose rate bounds the first
+    step (shape (0, 2): the step that has been taken, du over dt)."""
     out = np.inf
+    first = v.shape[0] > 0
     for e in range(e0, e1):
-        a, a_old = _areas(x, du, conn, e)
-        rate = _rate(a, a_old, dt)
+        if first:
+            rate = _velocity_rate(x, v, conn, e)
+        else:
+            a, a_old = _areas(x, du, conn, e)
+            rate = _rate(a, a_old, dt)
         if rate >= 0.0:
             continue
-        p = mat_params[emat[e]]
-        c = np.sqrt((p[BULK] + 4.0 * p[SHEAR] / 3.0) / p[RHO])
-        _, le = element_length(x, conn, e)
+        c = wave_speed(mat_params[emat[e]], sig, e)
+        a_now, le = element_length(x, conn, e)
+        if first:
+            a = a_now
         big_q = c_lin * c - c_quad * np.sqrt(a) * rate
         out = min(out, le / (big_q + np.sqrt(big_q * big_q + c * c)))
     return out

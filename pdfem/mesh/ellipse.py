@@ -55,6 +55,32 @@ def _hex_to_disc(p):
     return p * scale[:, None]
 
 
+def kite_positions(kite, s, t, blend=1.0):
+    """Unit-disc positions (nn, 2) of points given by kite coordinates: kite index ``kite``
+    and ``(s, t)`` in its unit square (s = 1 or t = 1 the boundary, pinned to radius 1).
+
+    The bilinear map of kite ``(C, M_i, V_i, M_{i+1})`` on the hexagon, then the radial map
+    of the hexagon onto the disc; the map :func:`ellipse_mesh` and the ring mesh share.
+    Points off the boundary move the fraction ``blend`` of the way from the hexagon to
+    their radial image (1: onto it, as in the kite mesh).
+    """
+    # Bilinear positions on the hexagon; C is the origin
+    v, m = _hexagon_points()
+    kite = np.asarray(kite, np.int64)
+    s = np.asarray(s, np.float64)[:, None]
+    t = np.asarray(t, np.float64)[:, None]
+    mi, vi, mj = m[kite], v[kite], m[(kite + 1) % 6]
+    hexa = s * (1.0 - t) * mi + s * t * vi + (1.0 - s) * t * mj
+    # Map to the unit disc; pin boundary points to radius 1 exactly (up to rounding)
+    disc = _hex_to_disc(hexa)
+    bnd = (s[:, 0] == 1.0) | (t[:, 0] == 1.0)
+    rb = np.hypot(disc[bnd, 0], disc[bnd, 1])
+    disc[bnd] /= rb[:, None]
+    if blend == 1.0:
+        return disc
+    return np.where(bnd[:, None], disc, (1.0 - blend) * hexa + blend * disc)
+
+
 def ellipse_mesh(a, b, level=1):
     """Mesh an ellipse with semi-axes ``a`` (local x) and ``b`` (local y) into ``6 level^2`` quads.
 
@@ -83,24 +109,19 @@ def ellipse_mesh(a, b, level=1):
     if not (a > 0.0 and b > 0.0):
         raise ValueError(f"semi-axes must be positive, got a={a!r}, b={b!r}")
     idx = _kite_numbering(n)
-    v, m = _hexagon_points()
-    # Bilinear positions of every kite's owned nodes (j >= 1) on the hexagon; C is the origin
-    s = np.arange(1, n + 1, dtype=np.float64)[:, None, None] / n
-    t = np.arange(0, n + 1, dtype=np.float64)[None, :, None] / n
-    hexa = np.zeros((1 + 6 * n * (n + 1), 2))
+    # Kite coordinates of every kite's owned nodes (j >= 1), the centre from kite 0
+    kite = np.zeros(1 + 6 * n * (n + 1), np.int64)
+    s = np.zeros(kite.shape[0])
+    t = np.zeros(kite.shape[0])
+    sj, tk = np.meshgrid(np.arange(1, n + 1) / n, np.arange(0, n + 1) / n, indexing="ij")
     for i in range(6):
-        mi, vi, mj = m[i], v[i], m[(i + 1) % 6]
-        p = s * (1.0 - t) * mi + s * t * vi + (1.0 - s) * t * mj
-        hexa[idx[i, 1:, :].ravel()] = p.reshape(-1, 2)
+        own = idx[i, 1:, :].ravel()
+        kite[own], s[own], t[own] = i, sj.ravel(), tk.ravel()
     # Boundary loop: per kite, edge s=1 from M_i up to V_i, then edge t=1 back to M_{i+1}
     parts = [np.concatenate([idx[i, n, :n], idx[i, n:0:-1, n]]) for i in range(6)]
     boundary = np.roll(np.concatenate(parts), -n)
-    # Map to the unit disc; pin boundary nodes to radius 1 exactly (up to rounding)
-    disc = _hex_to_disc(hexa)
-    rb = np.hypot(disc[boundary, 0], disc[boundary, 1])
-    disc[boundary] /= rb[:, None]
-    # Scale to the ellipse
-    xy = disc * np.array([a, b], dtype=np.float64)
+    # Positions on the disc, scaled to the ellipse
+    xy = kite_positions(kite, s, t) * np.array([a, b], dtype=np.float64)
     # Elements (j, k) of each kite, counter-clockwise like the kite (C, M_i, V_i, M_{i+1})
     j, k = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
     conn = np.concatenate(

@@ -24,7 +24,9 @@ import h5py
 import numpy as np
 
 from pdfem.io.bedfile import COLUMNS, read_bed, write_bed
-from pdfem.mesh.ellipse import _kite_numbering
+from pdfem.mesh.ellipse import _kite_numbering, ellipse_mesh
+from pdfem.mesh.locate import locate, shape
+from pdfem.mesh.ring import ring_mesh
 from pdfem.scene.values import SceneError
 
 # Natural coordinates of the 2x2 Gauss points, in the element kernel's order
@@ -84,6 +86,41 @@ def refine_points(values, level0, level, nip):
     eta = -1.0 + (2.0 * b[:, None] + 1.0 + _GP * _ETA[None, :]) / r
     quad = np.where(eta < 0, np.where(xi < 0, 0, 1), np.where(xi < 0, 3, 2))
     return np.take_along_axis(src, quad[None, :, :, None], axis=2)
+
+
+def ring_nodes(nodes, level0, level):
+    """Node values (n, nn0, d) of kite meshes at ``level0`` -> (n, nn, d) on the ring mesh of
+    ``level`` (a multiple of ``level0``). The kite meshes are refined to ``level`` first
+    (:func:`refine_nodes`); the ring's boundary nodes are that mesh's, in the same loop, and
+    every other node is interpolated bilinearly in the kite element holding it in the
+    unit-disc reference. So the grain keeps its polygon, exactly."""
+    fine = refine_nodes(nodes, level0, level)
+    ref_k, conn_k, bnd_k = ellipse_mesh(1.0, 1.0, level)
+    ref, _, bnd = ring_mesh(1.0, 1.0, level)
+    # Kite element and natural coordinates of every ring node, then the kite cells' maps
+    elem, xi, eta = locate(ref_k, conn_k, ref)
+    out = np.einsum("mk,nmkd->nmd", shape(xi, eta), fine[:, conn_k[elem]])
+    out[:, bnd] = fine[:, bnd_k]
+    return out
+
+
+def ring_points(values, level0, level, nip):
+    """Element point values (n, ne0, nip0, m) of kite meshes at ``level0`` -> (n, ne, nip, m)
+    on the ring mesh of ``level``: refined to the kite mesh of ``level``
+    (:func:`refine_points`), then each ring point takes the value of the kite point whose
+    quadrant of the kite element holds it (that element's value for one point)."""
+    fine = refine_points(values, level0, level, nip)
+    ref_k, conn_k, _ = ellipse_mesh(1.0, 1.0, level)
+    ref, conn, _ = ring_mesh(1.0, 1.0, level)
+    # The ring's element points in the reference (element centres for one point)
+    g = np.array([[-_GP, -_GP], [_GP, -_GP], [_GP, _GP], [-_GP, _GP]]) if nip == 4 \
+        else np.zeros((1, 2))
+    pts = np.einsum("pk,ekd->epd", shape(g[:, 0], g[:, 1]), ref[conn]).reshape(-1, 2)
+    elem, xi, eta = locate(ref_k, conn_k, pts)
+    quad = np.zeros(elem.shape, np.int64) if nip == 1 else \
+        np.where(eta < 0, np.where(xi < 0, 0, 1), np.where(xi < 0, 3, 2))
+    val = fine[:, elem, quad]
+    return val.reshape(values.shape[0], conn.shape[0], nip, values.shape[3])
 
 
 def relevel_bed(src, dst, level, rule=None):

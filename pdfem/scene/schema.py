@@ -51,8 +51,11 @@ ELEMENT = {
                 choices=("1pt", "2x2")),
     "hourglass": Key("float", 0.05, "hourglass stiffness coefficient (rule 1pt)", lo=0.0,
                      hi=0.5),
-    "level": Key("int", 1, "grain mesh refinement: each grain has 6 level^2 quads", lo=1,
-                 hi=10),
+    "level": Key("int", 1, "grain mesh refinement: each grain has 6 level^2 quads (kite) or "
+                 "6 level^2 + 12 level (ring)", lo=1, hi=10),
+    "mesh": Key("str", "kite", "grain mesh: the report's six kites subdivided, or a kite core "
+                "inside a ring of boundary quads (every boundary node on two elements)",
+                choices=("kite", "ring")),
 }
 
 # [bulk_viscosity]
@@ -73,6 +76,11 @@ MATERIAL_COMMON = {
     "density": _pos("float", REQUIRED, "mass density", "kg/m^3"),
     "bulk": _pos("float", REQUIRED, "bulk modulus K", "Pa"),
     "shear": _pos("float", REQUIRED, "shear modulus G", "Pa"),
+    "eos": Key("str", "linear", "bulk response: a constant bulk modulus, or the tangent of the "
+               "linear Us-up Hugoniot Us = c0 + eos_s up with c0 = sqrt(bulk/density)",
+               choices=("linear", "us_up")),
+    "eos_s": Key("float", OPTIONAL, "slope s of the Hugoniot (required by eos = \"us_up\")",
+                 lo=0.0, hi=10.0, lo_open=True),
     "specific_heat": _pos("float", OPTIONAL, "specific heat c (required by [heat])",
                           "J/(kg K)"),
     "conductivity": _nonneg("float", OPTIONAL, "thermal conductivity k (required by "

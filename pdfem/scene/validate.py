@@ -102,22 +102,30 @@ def resolve(doc, base_dir):
 def _bed_at_level(rows, element):
     """A bed file meshed at level L0 serves any scene whose level is a multiple of L0: its
     grain meshes (and stored stresses and state, at the scene's rule) are subdivided in place
-    (pdfem.prepare.relevel: the same polygons, finer quads)."""
-    from pdfem.prepare.relevel import RULE_POINTS, refine_nodes, refine_points
+    (pdfem.prepare.relevel: the same polygons, finer quads), or re-meshed as rings."""
+    from pdfem.prepare.relevel import (
+        RULE_POINTS,
+        refine_nodes,
+        refine_points,
+        ring_nodes,
+        ring_points,
+    )
 
     level, level0 = element["level"], rows.level
     if level % level0:
         raise SceneError("element.level", f"must be a multiple of {level0}, the level the bed "
                          f"file {rows.name} was meshed at (got {level})")
-    if level == level0:
+    ring = element["mesh"] == "ring"
+    if level == level0 and not ring:
         return
+    nodes, points = (ring_nodes, ring_points) if ring else (refine_nodes, refine_points)
     a = rows.arrays
-    a["nodes"] = refine_nodes(a["nodes"], level0, level)
-    a["node_v"] = refine_nodes(a["node_v"], level0, level)
+    a["nodes"] = nodes(a["nodes"], level0, level)
+    a["node_v"] = nodes(a["node_v"], level0, level)
     if "elem_sig" in a:
         nip = RULE_POINTS[element["rule"]]
-        a["elem_sig"] = refine_points(a["elem_sig"], level0, level, nip)
-        a["elem_mst"] = refine_points(a["elem_mst"], level0, level, nip)
+        a["elem_sig"] = points(a["elem_sig"], level0, level, nip)
+        a["elem_mst"] = points(a["elem_mst"], level0, level, nip)
     rows.level = level
 
 
@@ -153,9 +161,19 @@ def _materials(value):
             keys.update(S.MATERIAL_MODELS[model])
         hint = f' for model "{model}"' if known else ""
         m = check_table(tbl, keys, path, hint)
+        _eos_rules(m, path)
         MODEL_RULES.get(m["model"], lambda m, p: None)(m, path)
         out[name] = m
     return out
+
+
+def _eos_rules(m, path):
+    """eos_s is given exactly when the Us-up equation of state is chosen."""
+    if m["eos"] == "us_up" and "eos_s" not in m:
+        raise SceneError(f"{path}.eos_s", 'required with eos = "us_up"')
+    if m["eos"] != "us_up" and "eos_s" in m:
+        raise SceneError(f"{path}.eos_s", 'only with eos = "us_up" (got eos = '
+                         f'"{m["eos"]}")')
 
 
 def _cap_rules(m, path):
@@ -411,6 +429,9 @@ def _shock(value, r):
 def _prepare(value, r, mat_ids):
     """[prepare]: ranges ordered, material known; each method's own keys given."""
     pr = check_table(value, S.PREPARE, "prepare")
+    if r["element"]["mesh"] != "kite":
+        raise SceneError("element.mesh", "a bed is prepared on kite meshes, which its file "
+                         "stores; a scene that runs it may re-mesh it as rings")
     for key in ("semi_axis", "aspect"):
         if pr[key][0] > pr[key][1]:
             raise SceneError(f"prepare.{key}", f"min must be <= max (got {pr[key]})")

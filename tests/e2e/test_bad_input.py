@@ -64,6 +64,9 @@ FILES = {
     "negative.toml": _good(lambda d: d["domain"].update(cell_size=-1.0e-3)),
     "zero.toml": _good(lambda d: _grain_axes(d, [0.0, 3.0e-4])),
     "nan.toml": _good(lambda d: d["time"].update(end=float("nan"))),
+    "eos_no_s.toml": _good(lambda d: d["materials"]["grain"].update(eos="us_up")),
+    "eos_s_alone.toml": _good(lambda d: d["materials"]["grain"].update(eos_s=2.0)),
+    "eos_s_big.toml": _good(lambda d: d["materials"]["grain"].update(eos="us_up", eos_s=50.0)),
     "huge.toml": _good(lambda d: d["domain"].update(box=[0.0, 0.0, 1.0e9, 0.006])),
     "effect.toml": _good(lambda d: d.update(viscosityy={"coefficient": 1.0})),
     "fast.toml": _good(lambda d: d.update(blocks=[{
@@ -189,6 +192,11 @@ CASES = {
     "run negative size": (["run", "negative.toml"], "domain.cell_size: must be >= 0"),
     "run zero size": (["run", "zero.toml"], "grains[0].axes[0]: must be > 0"),
     "run nan": (["run", "nan.toml"], "time.end: must be finite"),
+    "run eos without slope": (["run", "eos_no_s.toml"],
+                              'materials.grain.eos_s: required with eos = "us_up"'),
+    "run slope without eos": (["run", "eos_s_alone.toml"],
+                              'materials.grain.eos_s: only with eos = "us_up"'),
+    "run slope out of range": (["run", "eos_s_big.toml"], "materials.grain.eos_s: must be"),
     "run huge": (["run", "huge.toml"], "domain.cell_size: the cell grid would have"),
     "run faster than light": (["run", "fast.toml"], "blocks[0].velocity: must be below"),
     "run unknown effect": (["run", "effect.toml"], "viscosityy: unknown table"),
@@ -475,9 +483,11 @@ def test_material_accepts_every_material_of_the_packaged_scene(tmp_path):
     from pdfem.material_point import cap_params_from_table
     from pdfem.scene import schema as S
 
+    # (the equation of state's keys with values of their own: the driver applies them)
     extra = {k: 1.0e-4 for k in (*S.MATERIAL_COMMON, *S.CAP) if k not in raw["hmx"]}
+    extra.update(eos="us_up", eos_s=2.0)
     p = cap_params_from_table({**raw["hmx"], **extra}, "materials.hmx")
-    assert "softening" in extra and p[P.RHO] == raw["hmx"]["density"]
+    assert "softening" in extra and p[P.RHO] == raw["hmx"]["density"] and p[P.EOS_S] == 2.0
 
 
 def test_many_coincident_grains_refused_with_the_first_pair(tmp_path):

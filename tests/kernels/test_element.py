@@ -270,9 +270,10 @@ def test_stable_dt_unit_square():
     conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
     emat = np.zeros(1, np.int32)
     cp = np.sqrt((K + 4.0 * G / 3.0) / RHO0)
-    np.testing.assert_allclose(q4_stable_dt(x, conn, emat, material(), 0, 1),
+    sig = np.zeros((1, 1, 4))
+    np.testing.assert_allclose(q4_stable_dt(x, conn, emat, material(), sig, 0, 1),
                                1.0 / np.sqrt(2.0) / cp, rtol=1e-15)
-    assert q4_stable_dt(x, conn, emat, material(), 0, 0) == np.inf
+    assert q4_stable_dt(x, conn, emat, material(), sig, 0, 0) == np.inf
 
 
 def test_jacobian_ratio():

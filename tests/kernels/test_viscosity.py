@@ -26,9 +26,10 @@ def _one(scale_old, dt=1e-6, cq=1.5, cl=0.06, q_old=0.0):
     du = x - scale_old * SQUARE
     conn = np.array([[0, 1, 2, 3]], np.int64)
     qv, ewq, f = np.array([q_old]), np.zeros(1), np.zeros((4, 2))
-    args = (x, du, conn, np.zeros(1, np.int64), _material(), 0, 1, dt, cq, cl)
+    args = (x, du, conn, np.zeros(1, np.int64), _material(), np.zeros((1, 1, 4)), 0, 1, dt,
+            cq, cl)
     bulk_viscosity_forces(*args, qv, ewq, f)
-    return qv[0], f, ewq[0], bulk_viscosity_dt(*args)
+    return qv[0], f, ewq[0], bulk_viscosity_dt(*args, np.zeros((0, 2)))
 
 
 def test_compression_closed_form():

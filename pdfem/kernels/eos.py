@@ -1,0 +1,99 @@
+"""Bulk response on a crystal's linear Us-up Hugoniot (an equation of state of the grains).
+
+A material with ``eos = "us_up"`` keeps the hypo-elastic stress update of its model, but its
+bulk modulus is the tangent of the pressure-volume curve of the shock Hugoniot
+Us = c0 + s up (Mie-Gruneisen with the Hugoniot as reference curve and Gamma = 0):
+
+    p_H(eta) = K0 eta / (1 - s eta)^2,    eta = 1 - V/V0 in [0, 1/s),   K0 = rho0 c0^2
+    K(p)     = -V dp_H/dV = (1 - eta) K0 (1 + s eta) / (1 - s eta)^3,   eta = eta(p)
+
+with eta(p) = 2 / (2 s + r + sqrt(r^2 + 4 s r)), r = K0 / p, the root of p (1 - s eta)^2 = K0 eta
+below 1/s. A step takes the secant modulus along p_H: the point's pressure p_n gives its
+compression eta_n = eta(p_n), the step's volumetric strain dv moves it to
+1 - eta_{n+1} = (1 - eta_n) exp(dv), and K = (p_n - p_H(eta_{n+1})) / dv. A purely volumetric
+step then ends on p_H exactly, so a point compressed to eta carries p_H(eta) whatever its
+steps, a closed load-unload cycle returns to its pressure (its trapezoidal stress work
+vanishes to second order in the step), and a steady
+shock's jump state lies on the Hugoniot. In tension (p <= 0) p_H is linear in eta. A step
+stops at eta = ETA_MAX / s (the pressure there stops the run through the stable step). K0 is
+the material's ``bulk`` (after any temperature softening), s its ``eos_s``. Sign convention:
+tension positive, p = -tr(sigma)/3 (sigma_zz included, plane strain).
+"""
+
+import math
+
+from numba import njit
+
+from pdfem.kernels.params import BULK, EOS_S, RHO, SHEAR
+
+# A step never compresses a point past this fraction of the limit eta = 1/s: the pressure
+# there, about 10^6 K0, stops the run through the stable step
+ETA_MAX = 0.999
+
+
+@njit(cache=True)
+def hugoniot_pressure(k0, s, eta):
+    """p_H(eta) of the module docstring [Pa] (eta < 1/s; linear K0 eta for eta < 0)."""
+    if eta <= 0.0:
+        return k0 * eta
+    g = 1.0 - s * eta
+    return k0 * eta / (g * g)
+
+
+@njit(cache=True)
+def hugoniot_bulk(k0, s, pressure):
+    """Tangent bulk modulus K(p) [Pa] of the module docstring at pressure p (compression
+    positive); K0 for p <= 0 or s <= 0, +inf where eta(p) rounds to the limit 1/s (or p is
+    not finite), which the stable step and the non-finite guard then stop on."""
+    if not (s > 0.0 and pressure > 0.0):
+        return k0
+    eta = hugoniot_eta(k0, s, pressure)
+    g = 1.0 - s * eta
+    if not g > 0.0:
+        return math.inf
+    return (1.0 - eta) * k0 * (1.0 + s * eta) / (g * g * g)
+
+
+@njit(cache=True)
+def hugoniot_eta(k0, s, pressure):
+    """eta(p) of the module docstring: the compression at which p_H reaches p (p / K0 for
+    p <= 0)."""
+    if not pressure > 0.0:
+        return pressure / k0
+    # The form without cancellation or overflow (r = K0 / p)
+    r = k0 / pressure
+    return 2.0 / (2.0 * s + r + math.sqrt(r * r + 4.0 * s * r))
+
+
+@njit(cache=True)
+def eos_row(p, s0, s1, s3, dv, out):
+    """The parameter row for a step of volumetric strain increment dv from the stress with
+    normal components (s0, s1, s3): p itself without an EOS, else ``out`` holding p with the
+    secant bulk modulus of the step along p_H (module docstring)."""
+    if not p[EOS_S] > 0.0:
+        return p
+    k0 = p[BULK]
+    s = p[EOS_S]
+    pn = -(s0 + s1 + s3) / 3.0
+    for i in range(p.shape[0]):
+        out[i] = p[i]
+    # The volume the pressure belongs to, moved by the step; the pressure there
+    eta = 1.0 - (1.0 - hugoniot_eta(k0, s, pn)) * math.exp(dv)
+    pe = hugoniot_pressure(k0, s, min(eta, ETA_MAX / s))
+    if pe - pn != 0.0 and dv != 0.0:
+        out[BULK] = (pn - pe) / dv
+    else:
+        out[BULK] = hugoniot_bulk(k0, s, pn)
+    return out
+
+
+@njit(cache=True)
+def wave_speed(p, sig, e):
+    """P-wave speed sqrt((K + 4G/3) / rho0) [m/s] of element e with stresses sig (ne, nip, 4):
+    with an EOS, K is the largest bulk modulus of its points' pressures."""
+    k = p[BULK]
+    if p[EOS_S] > 0.0:
+        for q in range(sig.shape[1]):
+            pq = -(sig[e, q, 0] + sig[e, q, 1] + sig[e, q, 3]) / 3.0
+            k = max(k, hugoniot_bulk(p[BULK], p[EOS_S], pq))
+    return math.sqrt((k + 4.0 * p[SHEAR] / 3.0) / p[RHO])

@@ -72,14 +72,13 @@ def hammer_2000(folder, size):
     return _fast(_shot(size, 2000.0, 3.0e-7))
 
 
-def piston_1500_eos(folder, size):
-    """The small shot-912 bed's piston at 1500 m/s (times scaled by 288/1500) on ring meshes
-    (level 1 for ci, 0.1 us; level 2 to the scene's end for large), the crystal on its Us-up
-    Hugoniot (eos_s = 2.29, the slope the scene declares)."""
+def _piston_eos(size, speed, level_large):
+    """The small shot-912 bed's piston at ``speed`` (times scaled by 288/speed) on ring meshes
+    (level 1 for ci, 0.1 us; level_large to the scene's end for large), the crystal on its
+    Us-up Hugoniot (eos_s = 2.29, the slope the scene declares)."""
     with open(_packaged("shot912_small.toml"), "rb") as f:
         doc = tomllib.load(f)
     doc["grains_file"]["path"] = _packaged(doc["grains_file"]["path"])
-    speed = 1500.0
     for b in doc["blocks"] + doc["bc"]:
         if "velocity" in b:
             b["velocity"] = [0.0, -speed]
@@ -88,12 +87,23 @@ def piston_1500_eos(folder, size):
                 b[key] *= 288.0 / speed
     end = 1.0e-7 if size == "ci" else doc["time"]["end"] * 288.0 / speed
     doc["time"]["end"] = end
-    doc["element"] = {"rule": "2x2", "level": 1 if size == "ci" else 2, "mesh": "ring"}
+    doc["element"] = {"rule": "2x2", "level": 1 if size == "ci" else level_large,
+                      "mesh": "ring"}
     doc["materials"]["hmx"].update(eos="us_up", eos_s=2.29)
     doc["output"] = {"path": "run.h5", "interval": end / 8, "energy_interval": end / 80}
     doc.pop("shock", None)
     doc.pop("gauges", None)
     return doc
+
+
+def piston_1500_eos(folder, size):
+    """The piston at 1500 m/s on ring meshes of level 2 (large), the crystal on its Hugoniot."""
+    return _piston_eos(size, 1500.0, 2)
+
+
+def piston_2000_eos(folder, size):
+    """The piston at 2000 m/s on ring meshes of level 1, the crystal on its Hugoniot."""
+    return _piston_eos(size, 2000.0, 1)
 
 
 def stiff_contact(folder, size):
@@ -307,6 +317,8 @@ CASES = {
     "hammer-1000": (hammer_1000, "hammer at 1000 m/s into the shot 912 bed"),
     "hammer-2000": (hammer_2000, "hammer at 2000 m/s into the shot 912 bed"),
     "piston-1500-eos": (piston_1500_eos, "piston at 1500 m/s, ring meshes, crystal on its "
+                        "Hugoniot"),
+    "piston-2000-eos": (piston_2000_eos, "piston at 2000 m/s, ring meshes, crystal on its "
                         "Hugoniot"),
     "stiff-contact": (stiff_contact, "contact stiffness kn0 x 100"),
     "aspect-4": (aspect_4, "grains of aspect ratio 4 piling up"),

@@ -116,10 +116,26 @@ def drop_restart_forces(store, fields, ck):
                  store.nb_own)
 
 
+def _new_defaults(saved, given):
+    """Drop from the given scene the keys of [element] and of every material that the saved
+    scene lacks and that hold the present schema's default: keys added since the checkpoint
+    was written (element.mesh, a material's eos), which then meant that default."""
+    from pdfem.scene import schema as S
+
+    tables = [(saved.get("element", {}), given.get("element", {}), S.ELEMENT)]
+    for name, mat in given.get("materials", {}).items():
+        tables.append((saved.get("materials", {}).get(name, {}), mat, S.MATERIAL_COMMON))
+    for old, new, keys in tables:
+        for key in [k for k in new if k not in old and k in keys]:
+            if new[key] == keys[key].default:
+                del new[key]
+
+
 def same_scene(path, saved, given):
     """A restart must run the checkpoint's scene; only [output], [guards] and the time keys
     end, safety, dt_min and max_steps may change."""
     a, b = tomllib.loads(saved), tomllib.loads(given)
+    _new_defaults(a, b)
     for d in (a, b):
         d.pop("output", None)
         d.pop("guards", None)

@@ -503,3 +503,22 @@ def test_packaged_default_scene_and_bed_load():
     assert r["domain"]["box"][2] - r["domain"]["box"][0] >= 16 * 0.245e-3
     assert r["materials"]["hmx"]["model"] == "cap" and r["shock"]["hammer"] == "hammer"
     assert [g["name"] for g in r["gauges"]] == ["hammer", "bottom"]
+
+
+def test_restart_scene_comparison_takes_keys_added_since_at_their_default():
+    """A checkpoint written before element.mesh and a material's eos existed restarts a
+    scene that holds them at their defaults, and not one that sets them otherwise."""
+    from pdfem.errors import InputError
+    from pdfem.scene.toml_out import dumps
+    from pdfem.setup import same_scene
+
+    old = {"element": {"rule": "1pt", "hourglass": 0.05, "level": 1},
+           "materials": {"g": {"model": "elastic", "density": 1900.0, "bulk": 1e10,
+                               "shear": 4e9}}}
+    new = {"element": dict(old["element"], mesh="kite"),
+           "materials": {"g": dict(old["materials"]["g"], eos="linear")}}
+    same_scene("c.h5", dumps(old), dumps(new))
+    for edit in ({"element": dict(new["element"], mesh="ring")},
+                 {"materials": {"g": dict(new["materials"]["g"], eos="us_up", eos_s=2.0)}}):
+        with pytest.raises(InputError, match="was written for a different scene"):
+            same_scene("c.h5", dumps(old), dumps({**new, **edit}))

@@ -8,6 +8,9 @@ from pdfem.kernels.integrate import body_sums
 from pdfem.kernels.viscosity import bulk_viscosity_dt, bulk_viscosity_forces
 from pdfem.store import ELEM, Field
 
+# No initial velocities: the bound of a step taken (du over dt)
+_NO_VELOCITY = np.zeros((0, 2))
+
 
 class BulkViscosity(Effect):
     """Viscous pressure of compressing elements; its work is a dissipated energy term."""
@@ -31,7 +34,7 @@ class BulkViscosity(Effect):
     def stable_dt(self, st, ctx):
         s = st.store
         # Before the first step: the rate of the initial velocities
-        v = s.v if st.nstep == 0 else np.zeros((0, 2))
+        v = s.v if st.nstep == 0 else _NO_VELOCITY
         return bulk_viscosity_dt(s.x, st.du, s.conn, s.emat, ctx.mat_params, s.sig, 0, s.ne_own,
                                  st.dt, self.c_quad, self.c_lin, v)
 

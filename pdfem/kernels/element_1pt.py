@@ -18,8 +18,8 @@ the elastic trial and its yield value exactly as ``cap.cap_update`` computes the
 the plastic return only when the trial is outside; an elastic point takes the elastic
 increment. With thermal coupling (eth of shape (ne, 3)) the material row may be softened
 with the element temperature and the thermal strain is taken out of the material's strain
-(pdfem.kernels.element.thermal_row); a material with an equation of state takes its bulk
-modulus at the step's pressure (pdfem.kernels.eos). Sign convention: tension positive.
+(pdfem.kernels.element.thermal_row); a material with an equation of state takes the secant
+bulk modulus of the step along its Hugoniot (pdfem.kernels.eos). Sign convention: tension positive.
 """
 
 import math

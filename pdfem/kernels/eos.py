@@ -1,8 +1,8 @@
 """Bulk response on a crystal's linear Us-up Hugoniot (an equation of state of the grains).
 
 A material with ``eos = "us_up"`` keeps the hypo-elastic stress update of its model, but its
-bulk modulus is the tangent of the pressure-volume curve of the shock Hugoniot
-Us = c0 + s up (Mie-Gruneisen with the Hugoniot as reference curve and Gamma = 0):
+bulk modulus follows the pressure-volume curve of the shock Hugoniot Us = c0 + s up
+(Mie-Gruneisen with the Hugoniot as reference curve and Gamma = 0):
 
     p_H(eta) = K0 eta / (1 - s eta)^2,    eta = 1 - V/V0 in [0, 1/s),   K0 = rho0 c0^2
     K(p)     = -V dp_H/dV = (1 - eta) K0 (1 + s eta) / (1 - s eta)^3,   eta = eta(p)

@@ -67,6 +67,11 @@ def refine_nodes(nodes, level0, level):
     return out
 
 
+def _quadrant(xi, eta):
+    """The 2x2 point (kernel order) whose quadrant of the element holds natural (xi, eta)."""
+    return np.where(eta < 0, np.where(xi < 0, 0, 1), np.where(xi < 0, 3, 2))
+
+
 def refine_points(values, level0, level, nip):
     """Element point values (n, ne0, nip0, m) at ``level0`` -> (n, ne, nip, m) at ``level``
     with ``nip`` points per element (1 or 4; module docstring)."""
@@ -84,8 +89,7 @@ def refine_points(values, level0, level, nip):
     # Parent natural coordinates of each sub-element point -> the parent point of its quadrant
     xi = -1.0 + (2.0 * a[:, None] + 1.0 + _GP * _XI[None, :]) / r
     eta = -1.0 + (2.0 * b[:, None] + 1.0 + _GP * _ETA[None, :]) / r
-    quad = np.where(eta < 0, np.where(xi < 0, 0, 1), np.where(xi < 0, 3, 2))
-    return np.take_along_axis(src, quad[None, :, :, None], axis=2)
+    return np.take_along_axis(src, _quadrant(xi, eta)[None, :, :, None], axis=2)
 
 
 def ring_nodes(nodes, level0, level):
@@ -117,8 +121,7 @@ def ring_points(values, level0, level, nip):
         else np.zeros((1, 2))
     pts = np.einsum("pk,ekd->epd", shape(g[:, 0], g[:, 1]), ref[conn]).reshape(-1, 2)
     elem, xi, eta = locate(ref_k, conn_k, pts)
-    quad = np.zeros(elem.shape, np.int64) if nip == 1 else \
-        np.where(eta < 0, np.where(xi < 0, 0, 1), np.where(xi < 0, 3, 2))
+    quad = np.zeros(elem.shape, np.int64) if nip == 1 else _quadrant(xi, eta)
     val = fine[:, elem, quad]
     return val.reshape(values.shape[0], conn.shape[0], nip, values.shape[3])
 

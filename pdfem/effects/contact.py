@@ -45,6 +45,9 @@ from pdfem.kernels.integrate import ACC_CWORK
 from pdfem.parallel.mpi import allgather_rows
 from pdfem.store import BODY, Field
 
+# contact.law: the overlap measure of the normal law (contact_law.P_LAW)
+LAWS = {"area": L.LAW_AREA, "potential": L.LAW_POTENTIAL}
+
 # Beyond RCAP * delta_max the hardening law continues along its tangent (see contact_law)
 RCAP = 0.95
 # A step may close a gap by at most this fraction of delta_max (two bodies each moving at the
@@ -94,6 +97,7 @@ class Contact(Effect):
                 row[L.P_MU] = over.get("friction", table["friction"])
                 row[L.P_RCAP] = RCAP
                 row[L.P_ZETA] = over.get("damping", table["damping"])
+                row[L.P_LAW] = LAWS[table["law"]]
         self.zeta_max = float(self.law[:, :, L.P_ZETA].max())
         self.delta_max = float(self.law[:, :, L.P_DMAX].max())
         self.delta_min = float(self.law[:, :, L.P_DMAX].min())

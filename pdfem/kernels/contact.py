@@ -79,6 +79,7 @@ from pdfem.kernels.contact_law import (
     P_DMAX,
     P_KN0,
     P_KS,
+    P_LAW,
     P_MU,
     P_RCAP,
     P_ZETA,
@@ -87,6 +88,7 @@ from pdfem.kernels.contact_law import (
     normal_force,
     shear_update,
 )
+from pdfem.kernels.contact_potential import corner_extent, pair_potential, wall_potential
 from pdfem.kernels.overlap import (
     K_P,
     K_Q,
@@ -181,6 +183,9 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
     """
     px, py, pt = alloc_clip_buffers()
     q4, tri, tmap = alloc_overlap_work()
+    # The potential law's own clip buffers and triangle (slot 0 of px holds the overlap)
+    qx, qy, qt = alloc_clip_buffers()
+    qtri = np.empty((3, 2))
     xa = np.empty((4, 2))
     xb = np.empty((4, 2))
     g = np.empty((NNOD, 2))
@@ -441,6 +446,37 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                         lo = min(lo, f)
                         hi = max(hi, f)
                     width = hi - lo
+        # The law of the pair (contact_law)
+        lr = (lrow[c] if by_row else emat[a] * nmat + (emat[a] if wall else emat[b]))
+        if law[lr, P_LAW] != 0.0 and (st == OV_OK or st == OV_INSIDE):
+            # The potential law: W, the equivalent area sqrt(W L) and its gradient replace
+            # the overlap area and dA/dx (contact_potential)
+            if wall:
+                wpot = wall_potential(xa, 0.5 * elen[a], wall_p0[w, 0], wall_p0[w, 1], wnx, wny,
+                                      qx, qy, qt, qtri, g)
+            else:
+                wpot = pair_potential(xa, xb, 0.5 * elen[a], 0.5 * elen[b], qx, qy, qt, qtri, g)
+            if not wpot > 0.0 or not length > 0.0:
+                st = OV_NONE
+            else:
+                area = np.sqrt(wpot * length)
+                sc = 0.5 / np.sqrt(wpot / length)
+                gax = 0.0
+                gay = 0.0
+                for k in range(NNOD):
+                    g[k, 0] *= sc
+                    g[k, 1] *= sc
+                    if k < 4:
+                        gax += g[k, 0]
+                        gay += g[k, 1]
+                if st == OV_INSIDE:
+                    # No chord: the normal is the gradient's for a translation of A, the width
+                    # the narrower element's extent along the tangent
+                    nx, ny = unit_normal(gax, gay, gax, gay)
+                    width = corner_extent(xa, -ny, nx)
+                    if not wall:
+                        width = min(width, corner_extent(xb, -ny, nx))
+                    st = OV_OK
         if st == OV_NONE:
             if dense:
                 _clear(r, 0.0, C_NONE, active, nodes, weights, fnod, us_out, res)
@@ -543,8 +579,7 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
             if nod[4 + k] >= 0 and (g[4 + k, 0] != 0.0 or g[4 + k, 1] != 0.0):
                 mb = min(mb, m[nod[4 + k]])
         meff = ma if wall else effective_mass(ma, mb)
-        # The law of the pair (contact_law): parameters, normal traction and its tangent
-        lr = (lrow[c] if by_row else emat[a] * nmat + (emat[a] if wall else emat[b]))
+        # The law's parameters, normal traction and its tangent
         kn0 = law[lr, P_KN0]
         ks = law[lr, P_KS]
         mu = wall_mu[w] if wall else law[lr, P_MU]

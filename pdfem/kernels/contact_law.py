@@ -35,7 +35,12 @@ P_KS = 2  # shear stiffness ks [Pa/m]
 P_MU = 3  # friction coefficient mu [-]
 P_RCAP = 4  # delta/delta_max beyond which the law continues linearly, 0 <= rcap < 1 [-]
 P_ZETA = 5  # normal damping, fraction of the contact spring's critical damping [-]
-NPAR = 6
+P_LAW = 6  # overlap measure: LAW_AREA (the report's) or LAW_POTENTIAL (contact_potential)
+NPAR = 7
+
+# Values of params[p, P_LAW]
+LAW_AREA = 0.0
+LAW_POTENTIAL = 1.0
 
 # Contact time step factor: the contact spring shares its nodes with element stiffness and
 # hardens within a step, so take half of the two-mass spring limit 2 sqrt(m_eff/k)

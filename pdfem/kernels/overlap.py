@@ -128,7 +128,7 @@ def clip_halfplane(px, py, pt, s, nin, x0, y0, nx, ny, line, d):
 
 
 @njit(cache=True)
-def _load_subject(pxy, n, px, py, pt, s):
+def load_subject(pxy, n, px, py, pt, s):
     """Copy subject polygon P = pxy[:n] (rows x, y) into slot s (vertex i, edge i -> i+1 has
     source i)."""
     for i in range(n):
@@ -148,7 +148,7 @@ def clip_into(pxy, n, qxy, m, px, py, pt, s0):
         return -1
     # Ping-pong between the two slots; start so that the last step writes into s0
     cur = s0 if m & 1 == 0 else s0 + 1
-    _load_subject(pxy, n, px, py, pt, cur)
+    load_subject(pxy, n, px, py, pt, cur)
     k = n
     for j in range(m):
         # Next vertex of Q (a compare, not an integer division)
@@ -362,7 +362,7 @@ def quad_overlap_area(xa, xb, px, py, pt):
 @njit(cache=True)
 def halfplane_into(xa, p0x, p0y, nx, ny, px, py, pt):
     """halfplane_overlap, inlined into the contact kernels."""
-    _load_subject(xa, 4, px, py, pt, 1)
+    load_subject(xa, 4, px, py, pt, 1)
     k = clip_halfplane(px, py, pt, 1, 4, p0x, p0y, nx, ny, 0, 0)
     st, area, cx, cy, c1x, c1y, c2x, c2y = classify(px, py, pt, k, bbox_scale2(xa))
     return st, area, cx, cy, c1x, c1y, c2x, c2y, k

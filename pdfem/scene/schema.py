@@ -184,6 +184,10 @@ CONTACT = {
     "damping": Key("float", 0.0, "normal damping, fraction of the critical damping of the "
                    "contact spring (0 = the report's undamped law); about 0.5 keeps the "
                    "boundary nodes of grains from bouncing off a hammer at km/s", lo=0.0, hi=1.0),
+    "law": Key("str", "area", "overlap measure of the normal law: \"area\" the report's mean "
+               "overlap (overlap area / L), \"potential\" the integral of the elements' "
+               "potentials over the overlap, which keeps repelling an element pushed wholly "
+               "inside another (docs/theory/contact.md)", choices=("area", "potential")),
 }
 
 # [contact.pairs."mat1:mat2"]: per material pair overrides

@@ -12,8 +12,9 @@ from tests.kernels.contact_helpers import SQ, random_quad, ref_polygon, rot, sho
 # ---- helpers ----
 
 
-def law_params(n, kn0=1e9, dmax=0.2, ks=5e8, mu=0.3, rcap=0.95, zeta=0.0):
+def law_params(n, kn0=1e9, dmax=0.2, ks=5e8, mu=0.3, rcap=0.95, zeta=0.0, law=L.LAW_AREA):
     p = np.empty((n, L.NPAR))
+    p[:, L.P_LAW] = law
     p[:, L.P_KN0], p[:, L.P_DMAX], p[:, L.P_KS] = kn0, dmax, ks
     p[:, L.P_MU], p[:, L.P_RCAP], p[:, L.P_ZETA] = mu, rcap, zeta
     return p

@@ -72,10 +72,12 @@ def hammer_2000(folder, size):
     return _fast(_shot(size, 2000.0, 3.0e-7))
 
 
-def _piston_eos(size, speed, level_large):
-    """The small shot-912 bed's piston at ``speed`` (times scaled by 288/speed) on ring meshes
-    (level 1 for ci, 0.1 us; level_large to the scene's end for large), the crystal on its
-    Us-up Hugoniot (eos_s = 2.29, the slope the scene declares)."""
+def _piston(size, speed, level_large, level_ci=1, end_ci=1.0e-7, mesh="ring", eos=True,
+            law="area"):
+    """The small shot-912 bed's piston at ``speed`` (times scaled by 288/speed): level_ci for
+    end_ci at CI size, level_large to the scene's end for large, on ``mesh`` meshes; eos: the
+    crystal on its Us-up Hugoniot (eos_s = 2.29, the slope the scene declares); law: the
+    contact law."""
     with open(_packaged("shot912_small.toml"), "rb") as f:
         doc = tomllib.load(f)
     doc["grains_file"]["path"] = _packaged(doc["grains_file"]["path"])
@@ -85,11 +87,14 @@ def _piston_eos(size, speed, level_large):
         for key in ("release", "ramp_down"):
             if key in b:
                 b[key] *= 288.0 / speed
-    end = 1.0e-7 if size == "ci" else doc["time"]["end"] * 288.0 / speed
+    end = end_ci if size == "ci" else doc["time"]["end"] * 288.0 / speed
     doc["time"]["end"] = end
-    doc["element"] = {"rule": "2x2", "level": 1 if size == "ci" else level_large,
-                      "mesh": "ring"}
-    doc["materials"]["hmx"].update(eos="us_up", eos_s=2.29)
+    doc["element"] = {"rule": "2x2", "level": level_ci if size == "ci" else level_large,
+                      "mesh": mesh}
+    if eos:
+        doc["materials"]["hmx"].update(eos="us_up", eos_s=2.29)
+    if law != "area":
+        doc["contact"]["law"] = law
     doc["output"] = {"path": "run.h5", "interval": end / 8, "energy_interval": end / 80}
     doc.pop("shock", None)
     doc.pop("gauges", None)
@@ -98,12 +103,20 @@ def _piston_eos(size, speed, level_large):
 
 def piston_1500_eos(folder, size):
     """The piston at 1500 m/s on ring meshes of level 2 (large), the crystal on its Hugoniot."""
-    return _piston_eos(size, 1500.0, 2)
+    return _piston(size, 1500.0, 2)
 
 
 def piston_2000_eos(folder, size):
     """The piston at 2000 m/s on ring meshes of level 1, the crystal on its Hugoniot."""
-    return _piston_eos(size, 2000.0, 1)
+    return _piston(size, 2000.0, 1)
+
+
+def piston_1500_potential(folder, size):
+    """The piston at 1500 m/s on the scene's own kite meshes and linear bulk with the potential
+    contact law: level 2 for 0.13 us at CI size (past the area law's stop at 0.119 us, an
+    element inside another), level 3 to the scene's end for large."""
+    return _piston(size, 1500.0, 3, level_ci=2, end_ci=1.3e-7, mesh="kite", eos=False,
+                   law="potential")
 
 
 def stiff_contact(folder, size):
@@ -320,6 +333,8 @@ CASES = {
                         "Hugoniot"),
     "piston-2000-eos": (piston_2000_eos, "piston at 2000 m/s, ring meshes, crystal on its "
                         "Hugoniot"),
+    "piston-1500-potential": (piston_1500_potential, "piston at 1500 m/s, kite meshes, the "
+                              "potential contact law"),
     "stiff-contact": (stiff_contact, "contact stiffness kn0 x 100"),
     "aspect-4": (aspect_4, "grains of aspect ratio 4 piling up"),
     "sheared-mesh": (sheared, "grain meshes sheared to a Jacobian ratio of 10, hit at 100 m/s"),

@@ -20,7 +20,7 @@ enum { OV_OK = 0, OV_NONE = 1, OV_INSIDE = 2, OV_OVERFLOW = 3 };
 enum { C_NONE = 0, C_ACTIVE = 1, C_INSIDE = -1, C_NOEDGE = -2, C_NONORMAL = -3,
        C_OVERFLOW = -4 };
 enum { K_P = 0, K_Q = 1, K_X = 2 };
-enum { P_KN0 = 0, P_DMAX = 1, P_KS = 2, P_MU = 3, P_RCAP = 4, P_ZETA = 5, NPAR = 6 };
+enum { P_KN0 = 0, P_DMAX = 1, P_KS = 2, P_MU = 3, P_RCAP = 4, P_ZETA = 5, P_LAW = 6, NPAR = 7 };
 enum { R_FN, R_FS, R_ENERGY, R_DISS, R_STIFF, R_DELTA, R_WIDTH, R_NX, R_NY, R_CX, R_CY,
        R_DAMP, R_LEN, R_KSL, R_MEFF, R_AREA, NRES };
 static const double SLIVER = 1e-14;

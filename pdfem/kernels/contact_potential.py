@@ -1,0 +1,224 @@
+"""The potential contact law: an overlap measure that keeps growing up to full overlap.
+
+The report's law (contact.py) takes its mean overlap from the overlap area A of two elements.
+Once one element lies wholly inside the other, A is that element's own area and no longer
+changes with position, so the force, dE/dx = t_n dA/dx, vanishes: nothing pushes the element
+back out. The potential law (``contact.law = "potential"``) measures the overlap instead by the
+integral of a potential over it, as the combined finite-discrete element method does:
+
+    W = int_{A cap B} (psi_A + psi_B) dx                                  [m^3 per m]
+
+psi_E, the potential of element E, is zero on E's boundary and h_E = elen_E / 2 at its
+centroid c_E (the mean of its corners), linear on each of the four triangles (corner k,
+corner k+1, c_E). For a square of side s it is exactly the distance to the nearest edge.
+Against a wall, the wall's potential is the depth behind its line:
+
+    W = int_{A cap H} (psi_A + d) dx,     d(x) = -n . (x - p0)  (H: behind the wall).
+
+Deep inside another element psi of the host still rises towards its centre, and behind a wall d
+rises without bound, so W grows and dW/dx is nonzero at any penetration short of the exact
+symmetric overlap of two coincident elements.
+
+The law of contact_law then acts on the mean overlap delta = sqrt(W / L), with L the pair's
+length (contact.py). Two squares of side s pressed together over a whole edge by d have
+W = s d^2 (1 - d / (3 s)): delta = d to leading order, the area law's delta = A / L = d. The
+contact kernel works with the equivalent area A_eq = L delta = sqrt(W L) and its gradient
+dA_eq/dx = dW/dx / (2 delta), so the traction, the energy E = L phi(delta), the damping, the
+stable step and every output keep their meaning: the forces are -t_n dA_eq/dx = -dE/dx, the
+gradient of an energy, and do no work beyond its change.
+
+dW/dx is exact. For one term I = int_{S cap T} psi_T (S an element, T a triangle of the other
+element Q):
+- moving Q's nodes changes the field at a fixed point: with barycentric coordinates lambda_j
+  of T's vertices p_j (v0, v1, c_Q), psi_T = h lambda_c and d lambda_c / d p_j = -lambda_j
+  grad lambda_c; c_Q is the mean of Q's corners, so each corner takes a quarter of c_Q's part.
+  The integrand is linear, so the integral is the clipped polygon's area times its value at the
+  polygon's centroid. The domain's edges on Q's outer edges carry psi = 0, and those on the
+  triangles' inner edges cancel between neighbours (the same psi and the same motion);
+- moving S's nodes sweeps the domain along the polygon's edges on S's boundary: node i of the
+  edge (i, i+1) gets int psi_T N_i n ds, psi_T and the hat N_i both linear along the edge.
+Triangles of non-positive orientation (an element folded at its centroid) hold no potential.
+
+Sign: W >= 0; g receives +dW/dx (the energy's gradient; the force is its negative).
+"""
+
+import numpy as np
+from numba import njit
+
+from pdfem.kernels.overlap import (
+    T_SRC,
+    clip_halfplane,
+    clip_into,
+    load_subject,
+    polygon_area_centroid,
+)
+
+# Rows of a pair's gradient g (8, 2): A's nodes 0-3, B's nodes 4-7
+ROW_A = 0
+ROW_B = 4
+
+
+@njit(cache=True)
+def element_triangle(xq, k, tri):
+    """Triangle k of the quad xq (4, 2): corners k, k+1 and the centroid, into tri (3, 2).
+    Returns twice its signed area (positive when counter-clockwise)."""
+    k1 = k + 1 if k + 1 < 4 else 0
+    tri[0, 0] = xq[k, 0]
+    tri[0, 1] = xq[k, 1]
+    tri[1, 0] = xq[k1, 0]
+    tri[1, 1] = xq[k1, 1]
+    tri[2, 0] = 0.25 * (xq[0, 0] + xq[1, 0] + xq[2, 0] + xq[3, 0])
+    tri[2, 1] = 0.25 * (xq[0, 1] + xq[1, 1] + xq[2, 1] + xq[3, 1])
+    return ((tri[1, 0] - tri[0, 0]) * (tri[2, 1] - tri[0, 1])
+            - (tri[1, 1] - tri[0, 1]) * (tri[2, 0] - tri[0, 0]))
+
+
+@njit(cache=True)
+def apex_coordinate(tri, d2, x, y):
+    """Barycentric coordinate of the apex tri[2] at (x, y); d2 twice the triangle's area."""
+    ex = tri[1, 0] - tri[0, 0]
+    ey = tri[1, 1] - tri[0, 1]
+    return (ex * (y - tri[0, 1]) - ey * (x - tri[0, 0])) / d2
+
+
+@njit(cache=True)
+def field_gradient(tri, d2, k, h, area, cx, cy, g, rq):
+    """Add to g rows rq..rq+3 the derivative of int psi_T over a polygon of this area and
+    centroid (cx, cy) with respect to the nodes of the quad whose triangle k tri is (the field
+    moving under a fixed polygon). Returns lambda_c at the centroid."""
+    lc = apex_coordinate(tri, d2, cx, cy)
+    l0 = ((tri[1, 0] - cx) * (tri[2, 1] - cy) - (tri[1, 1] - cy) * (tri[2, 0] - cx)) / d2
+    l1 = 1.0 - l0 - lc
+    # grad lambda_c, scaled by -h area
+    gx = -(tri[1, 1] - tri[0, 1]) / d2 * (-h * area)
+    gy = (tri[1, 0] - tri[0, 0]) / d2 * (-h * area)
+    k1 = k + 1 if k + 1 < 4 else 0
+    g[rq + k, 0] += l0 * gx
+    g[rq + k, 1] += l0 * gy
+    g[rq + k1, 0] += l1 * gx
+    g[rq + k1, 1] += l1 * gy
+    # The centroid is the corners' mean
+    for m in range(4):
+        g[rq + m, 0] += 0.25 * lc * gx
+        g[rq + m, 1] += 0.25 * lc * gy
+    return lc
+
+
+@njit(cache=True)
+def sweep_gradient(xs, px, py, pt, n, fx, fy, f0, fz, g, rs):
+    """Add to g rows rs..rs+3 the derivative of int f over the polygon in slot 0 (n vertices)
+    with respect to the nodes of the subject xs whose edges its T_SRC >= 0 edges lie on; f is
+    the linear field f0 + fx x + fy y, scaled by fz (fz = 0 adds nothing)."""
+    if fz == 0.0:
+        return
+    for i in range(n):
+        src = pt[0, i, T_SRC]
+        if src < 0:
+            continue
+        i1 = i + 1 if i + 1 < n else 0
+        # Outward normal x length of the polygon edge, and the field at its ends
+        ex = py[0, i1] - py[0, i]
+        ey = px[0, i] - px[0, i1]
+        fa = fz * (f0 + fx * px[0, i] + fy * py[0, i])
+        fb = fz * (f0 + fx * px[0, i1] + fy * py[0, i1])
+        # The ends' parameters along the subject's edge src -> src + 1
+        j = src
+        j1 = j + 1 if j + 1 < 4 else 0
+        dx = xs[j1, 0] - xs[j, 0]
+        dy = xs[j1, 1] - xs[j, 1]
+        ll = dx * dx + dy * dy
+        if not ll > 0.0:
+            continue
+        sa = min(max(((px[0, i] - xs[j, 0]) * dx + (py[0, i] - xs[j, 1]) * dy) / ll, 0.0), 1.0)
+        sb = min(max(((px[0, i1] - xs[j, 0]) * dx + (py[0, i1] - xs[j, 1]) * dy) / ll, 0.0), 1.0)
+        # int f N ds / length for the two hats N_j = 1 - s and N_j1 = s (both ends linear)
+        ra = 1.0 - sa
+        rb = 1.0 - sb
+        cj = fa * ra / 3.0 + (fa * rb + fb * ra) / 6.0 + fb * rb / 3.0
+        cj1 = fa * sa / 3.0 + (fa * sb + fb * sa) / 6.0 + fb * sb / 3.0
+        g[rs + j, 0] += cj * ex
+        g[rs + j, 1] += cj * ey
+        g[rs + j1, 0] += cj1 * ex
+        g[rs + j1, 1] += cj1 * ey
+
+
+@njit(cache=True)
+def side_potential(xs, xq, hq, px, py, pt, tri, g, rs, rq):
+    """int over S cap Q of psi_Q (S = xs, Q = xq, both (4, 2) CCW; psi_Q's peak hq), its
+    gradient added to g: S's nodes in rows rs..rs+3, Q's in rows rq..rq+3. px, py, pt: clip
+    buffers (slots 0 and 1 are used); tri (3, 2) scratch. Returns the integral (>= 0)."""
+    w = 0.0
+    for k in range(4):
+        d2 = element_triangle(xq, k, tri)
+        if not d2 > 0.0:
+            continue
+        n = clip_into(xs, 4, tri, 3, px, py, pt, 0)
+        if n < 3:
+            continue
+        area, cx, cy = polygon_area_centroid(px, py, 0, n)
+        if not area > 0.0:
+            continue
+        lc = field_gradient(tri, d2, k, hq, area, cx, cy, g, rq)
+        w += area * hq * lc
+        # psi_T = hq lambda_c, linear: lambda_c = (e_x (y - y0) - e_y (x - x0)) / d2
+        ex = tri[1, 0] - tri[0, 0]
+        ey = tri[1, 1] - tri[0, 1]
+        sweep_gradient(xs, px, py, pt, n, -ey / d2, ex / d2,
+                       (ey * tri[0, 0] - ex * tri[0, 1]) / d2, hq, g, rs)
+    return w
+
+
+@njit(cache=True)
+def pair_potential(xa, xb, ha, hb, px, py, pt, tri, g):
+    """W of elements A (xa) and B (xb) with potential peaks ha and hb; g (8, 2) is zeroed and
+    receives dW/dx (A's nodes rows 0-3, B's rows 4-7). Returns W."""
+    for r in range(8):
+        g[r, 0] = 0.0
+        g[r, 1] = 0.0
+    w = side_potential(xa, xb, hb, px, py, pt, tri, g, ROW_A, ROW_B)
+    return w + side_potential(xb, xa, ha, px, py, pt, tri, g, ROW_B, ROW_A)
+
+
+@njit(cache=True)
+def wall_potential(xa, ha, p0x, p0y, nx, ny, px, py, pt, tri, g):
+    """W of element A (xa, potential peak ha) and the wall {p : n.(p - p0) < 0} (n its unit
+    normal into the domain); g (8, 2) is zeroed and receives dW/dx in rows 0-3. Returns W."""
+    for r in range(8):
+        g[r, 0] = 0.0
+        g[r, 1] = 0.0
+    w = 0.0
+    # A's own potential behind the wall: each triangle clipped by the wall's line (field only:
+    # the polygons' edges lie on the wall, on A's boundary where psi = 0, or inside A)
+    for k in range(4):
+        d2 = element_triangle(xa, k, tri)
+        if not d2 > 0.0:
+            continue
+        load_subject(tri, 3, px, py, pt, 1)
+        n = clip_halfplane(px, py, pt, 1, 3, p0x, p0y, nx, ny, 0, 0)
+        if n < 3:
+            continue
+        area, cx, cy = polygon_area_centroid(px, py, 0, n)
+        if not area > 0.0:
+            continue
+        w += area * ha * field_gradient(tri, d2, k, ha, area, cx, cy, g, ROW_A)
+    # The wall's depth over the part of A behind it (A's edges sweep it)
+    load_subject(xa, 4, px, py, pt, 1)
+    n = clip_halfplane(px, py, pt, 1, 4, p0x, p0y, nx, ny, 0, 0)
+    if n >= 3:
+        area, cx, cy = polygon_area_centroid(px, py, 0, n)
+        if area > 0.0:
+            w += area * -(nx * (cx - p0x) + ny * (cy - p0y))
+            sweep_gradient(xa, px, py, pt, n, -nx, -ny, nx * p0x + ny * p0y, 1.0, g, ROW_A)
+    return w
+
+
+@njit(cache=True)
+def corner_extent(xq, tx, ty):
+    """Extent of the corners of xq (4, 2) along (tx, ty)."""
+    lo = np.inf
+    hi = -np.inf
+    for k in range(4):
+        f = xq[k, 0] * tx + xq[k, 1] * ty
+        lo = min(lo, f)
+        hi = max(hi, f)
+    return hi - lo

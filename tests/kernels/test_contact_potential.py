@@ -1,0 +1,213 @@
+"""The potential contact law: W and its exact gradient, closed forms, and an element pushed
+wholly into another (or behind a wall) still repelled."""
+
+import numpy as np
+import pytest
+
+from pdfem.kernels import contact as C
+from pdfem.kernels import contact_law as L
+from pdfem.kernels import contact_potential as P
+from pdfem.kernels.overlap import alloc_clip_buffers
+from tests.kernels.contact_helpers import SQ, random_quad
+from tests.kernels.test_contact import law_params, outputs, run_pairs, two_elements
+
+KN0 = 1e9
+DMAX = 0.5
+
+
+def buffers():
+    return (*alloc_clip_buffers(), np.empty((3, 2)), np.empty((8, 2)))
+
+
+def pair_w(x, ha, hb):
+    px, py, pt, tri, g = buffers()
+    return P.pair_potential(x[:4], x[4:], ha, hb, px, py, pt, tri, g), g
+
+
+def wall_w(xa, ha, p0, n):
+    px, py, pt, tri, g = buffers()
+    return P.wall_potential(xa, ha, p0[0], p0[1], n[0], n[1], px, py, pt, tri, g), g
+
+
+def fd_gradient(fun, x, eps=1e-7):
+    """Central differences of fun at x, every coordinate."""
+    out = np.zeros_like(x)
+    for i in np.ndindex(*x.shape):
+        xp = x.copy()
+        xm = x.copy()
+        xp[i] += eps
+        xm[i] -= eps
+        out[i] = (fun(xp) - fun(xm)) / (2 * eps)
+    return out
+
+
+def test_pair_gradient_is_exact_for_random_quads():
+    rng = np.random.default_rng(11)
+    checked = 0
+    while checked < 40:
+        x = np.vstack([random_quad(rng, spread=0.3), random_quad(rng, spread=0.3)])
+        w, g = pair_w(x, 0.55, 0.45)
+        if w <= 1e-6:
+            continue
+        fd = fd_gradient(lambda y: pair_w(y, 0.55, 0.45)[0], x)
+        # Measured below 1e-8 of the largest component (the differences' own error)
+        assert np.abs(fd - g).max() <= 1e-6 * np.abs(g).max()
+        # W is invariant under translation: the gradient sums to zero
+        assert np.abs(g.sum(0)).max() <= 1e-13 * np.abs(g).max()
+        checked += 1
+
+
+def test_pair_gradient_nonconvex_host():
+    # B has a reflex corner at node 2, its four triangles still positive
+    xb = np.array([[0.0, 0.0], [1.0, 0.0], [0.55, 0.45], [0.0, 1.0]]) + [0.3, 0.1]
+    xa = SQ * 0.5 + [0.4, 0.2]
+    x = np.vstack([xa, xb])
+    w, g = pair_w(x, 0.25, 0.5)
+    assert w > 0
+    fd = fd_gradient(lambda y: pair_w(y, 0.25, 0.5)[0], x)
+    assert np.abs(fd - g).max() <= 1e-6 * np.abs(g).max()
+
+
+def test_flat_contact_closed_form():
+    # Two squares of side s over a whole edge by d: W = s d^2 - 2 d^3 / 3 (each square's
+    # potential is its distance to the nearest edge)
+    s = 2.0
+    for d in (1e-3, 0.05, 0.3):
+        x = np.vstack([SQ * s, SQ * s + [s - d, 0.0]])
+        w, g = pair_w(x, s / 2, s / 2)
+        assert w == pytest.approx(s * d * d - 2 * d ** 3 / 3, rel=1e-12)
+        # dW/dd for a translation of A: 2 s d - 2 d^2
+        assert g[:4, 0].sum() == pytest.approx(2 * s * d - 2 * d * d, rel=1e-12)
+
+
+def test_wall_gradient_and_closed_form():
+    rng = np.random.default_rng(5)
+    for _ in range(20):
+        xa = random_quad(rng, spread=0.2)
+        n = np.array([np.cos(a := rng.uniform(0, 2 * np.pi)), np.sin(a)])
+        p0 = rng.normal(0, 0.2, 2)
+        w, g = wall_w(xa, 0.5, p0, n)
+        if w <= 1e-6:
+            continue
+        fd = fd_gradient(lambda y, p0=p0, n=n: wall_w(y, 0.5, p0, n)[0], xa)
+        assert np.abs(fd - g[:4]).max() <= 1e-6 * np.abs(g[:4]).max()
+    # A unit square wholly behind the floor y = 0 with its top at depth D: W = 1/6 + D + 1/2
+    # (its pyramid of volume 1/6, and the mean depth D + 1/2); dW/dy = -1 for the square
+    w, g = wall_w(SQ - [0.0, 1.0 + 0.3], 0.5, (0.0, 0.0), (0.0, 1.0))
+    assert w == pytest.approx(1 / 6 + 0.3 + 0.5, rel=1e-14)
+    assert g[:4].sum(0) == pytest.approx([0.0, -1.0], abs=1e-14)
+
+
+def energy_and_forces(x, conn, ebnd, egid, eloc, elen, law):
+    """Normal energy and nodal forces of the single pair (0, 1), frictionless, no shear."""
+    par = law_params(1, kn0=KN0, dmax=DMAX, ks=0.0, mu=0.0, law=law)
+    _, out = run_pairs(x, np.zeros_like(x), conn, ebnd, egid, eloc, elen,
+                       np.array([[0, 1]], np.int64), par, np.zeros(1))
+    return out
+
+
+def pair_energy(x, conn, ebnd, egid, eloc, elen):
+    """The pair's stored energy under the potential law."""
+    return energy_and_forces(x, conn, ebnd, egid, eloc, elen, L.LAW_POTENTIAL)[5][0, C.R_ENERGY]
+
+
+def test_element_wholly_inside_another_is_repelled():
+    # A small square B (side b) wholly inside the host A (side s = 1), in A's right triangle
+    # at distance u of B's centre from A's right edge: W = b^2 u + b^3 / 6, dW/dx_B = -b^2
+    b, u = 0.1, 0.2
+    xa = SQ.copy()
+    xb = SQ * b + [1.0 - u - b / 2, 0.5 - b / 2]
+    x, conn, ebnd, egid, eloc, elen = two_elements(xa, xb)
+    out = energy_and_forces(x, conn, ebnd, egid, eloc, elen, L.LAW_POTENTIAL)
+    act, nodes, _, fnod, _, res = out
+    assert act[0] == C.C_ACTIVE
+    ln = min(elen)
+    w = b * b * u + b ** 3 / 6
+    delta = np.sqrt(w / ln)
+    assert res[0, C.R_DELTA] == pytest.approx(delta, rel=1e-12)
+    tn = -L.normal_force(delta, 1.0, KN0, DMAX, 0.95)[0]
+    # The force on B points out through A's nearest edge (+x) with magnitude t_n b^2 / (2 delta)
+    fb = fnod[0, 4:].sum(0)
+    assert fb[0] == pytest.approx(tn * b * b / (2 * delta), rel=1e-12)
+    assert abs(fb[1]) <= 1e-12 * fb[0]
+    # ... and is minus the gradient of the contact's energy, node by node
+    fd = fd_gradient(lambda y: pair_energy(y, conn, ebnd, egid, eloc, elen), x, eps=1e-8)
+    f = np.zeros_like(x)
+    f[nodes[0]] += fnod[0]
+    assert np.abs(f + fd).max() <= 1e-6 * np.abs(f).max()
+    # The report's area law has no force to give here: the pair is a guard
+    act_area = energy_and_forces(x, conn, ebnd, egid, eloc, elen, L.LAW_AREA)[0]
+    assert act_area[0] == C.C_INSIDE
+
+
+def test_deeper_inside_is_pushed_harder():
+    # Pushing B from A's edge towards its centre: W and the outward force both grow
+    xa = SQ.copy()
+    last_w, last_f = 0.0, 0.0
+    for u in (0.0, 0.1, 0.2, 0.3, 0.4):
+        xb = SQ * 0.1 + [1.0 - u - 0.05, 0.45]
+        x, conn, ebnd, egid, eloc, elen = two_elements(xa, xb)
+        act, _, _, fnod, _, res = energy_and_forces(x, conn, ebnd, egid, eloc, elen,
+                                                    L.LAW_POTENTIAL)
+        assert act[0] == C.C_ACTIVE
+        fb = fnod[0, 4:].sum(0)[0]
+        assert res[0, C.R_ENERGY] > last_w and fb > last_f > -1.0
+        last_w, last_f = res[0, C.R_ENERGY], fb
+
+
+def test_random_pairs_forces_are_energy_gradient():
+    rng = np.random.default_rng(8)
+    done = 0
+    while done < 10:
+        xa, xb = random_quad(rng, spread=0.3), random_quad(rng, spread=0.3)
+        x, conn, ebnd, egid, eloc, elen = two_elements(xa, xb)
+        act, nodes, _, fnod, _, res = energy_and_forces(x, conn, ebnd, egid, eloc, elen,
+                                                        L.LAW_POTENTIAL)
+        if act[0] != C.C_ACTIVE or res[0, C.R_DELTA] < 1e-3:
+            continue
+
+        f = np.zeros_like(x)
+        f[nodes[0]] += fnod[0]
+        fd = fd_gradient(lambda y, mesh=(conn, ebnd, egid, eloc, elen): pair_energy(y, *mesh),
+                         x, eps=1e-8)
+        assert np.abs(f + fd).max() <= 1e-5 * np.abs(f).max()
+        assert np.abs(f.sum(0)).max() <= 1e-12 * np.abs(f).max()
+        done += 1
+
+
+def test_flat_contact_matches_area_law_to_leading_order():
+    s, d = 1.0, 1e-3
+    x, conn, ebnd, egid, eloc, elen = two_elements(SQ * s, SQ * s + [s - d, 0.0])
+    res_p = energy_and_forces(x, conn, ebnd, egid, eloc, elen, L.LAW_POTENTIAL)[5]
+    res_a = energy_and_forces(x, conn, ebnd, egid, eloc, elen, L.LAW_AREA)[5]
+    # delta = d sqrt(1 - 2 d / 3 s) against d
+    assert res_p[0, C.R_DELTA] == pytest.approx(d * np.sqrt(1 - 2 * d / (3 * s)), rel=1e-12)
+    assert res_a[0, C.R_DELTA] == pytest.approx(d, rel=1e-12)
+    assert res_p[0, C.R_FN] == pytest.approx(res_a[0, C.R_FN], rel=2 * d)
+    assert res_p[0, C.R_NX] == pytest.approx(1.0) and res_p[0, C.R_WIDTH] == pytest.approx(s)
+
+
+def test_element_behind_wall_is_repelled():
+    # A unit square wholly behind the floor y = 0 (its top at depth 0.3)
+    xa = SQ - [0.0, 1.3]
+    conn = np.array([[0, 1, 2, 3]], np.int64)
+    ebnd = np.ones((1, 4), np.int8)
+    elen = np.array([1.0])
+    out = outputs(1)
+    for law, code in ((L.LAW_POTENTIAL, C.C_ACTIVE), (L.LAW_AREA, C.C_INSIDE)):
+        par = law_params(1, kn0=KN0, dmax=5.0, ks=0.0, mu=0.0, law=law)
+        C.element_wall_forces(xa, np.zeros_like(xa), conn, ebnd, elen, np.zeros(1, np.int64),
+                              np.zeros((1, 2)), np.array([[0.0, 1.0]]), par, np.zeros(1),
+                              *out, np.ones(4), 0.0)
+        assert out[0][0] == code
+    res = out[5]
+    # W = 1/6 + 0.8 behind the floor: the force is t_n dW/dy / (2 delta) along +y
+    par = law_params(1, kn0=KN0, dmax=5.0, ks=0.0, mu=0.0, law=L.LAW_POTENTIAL)
+    C.element_wall_forces(xa, np.zeros_like(xa), conn, ebnd, elen, np.zeros(1, np.int64),
+                          np.zeros((1, 2)), np.array([[0.0, 1.0]]), par, np.zeros(1), *out,
+                          np.ones(4), 0.0)
+    delta = np.sqrt(1 / 6 + 0.8)
+    tn = -L.normal_force(delta, 1.0, KN0, 5.0, 0.95)[0]
+    assert res[0, C.R_DELTA] == pytest.approx(delta, rel=1e-13)
+    assert out[3][0, :4].sum(0) == pytest.approx([0.0, tn / (2 * delta)], rel=1e-12)
+    assert res[0, C.R_NY] == pytest.approx(-1.0)

@@ -172,6 +172,13 @@ def read_path_csv(fname):
     t = np.array(rows, float).reshape(-1, 4)
     if not np.all(np.isfinite(t)):
         raise InputError(f"--path: {fname}: non-finite strain")
+    # A small-strain driver: every component within [-1, 1], as for --strain
+    bad = np.argwhere(np.abs(t) > 1.0)
+    if bad.size:
+        r, c = bad[0]
+        raise InputError(f"--path: {fname}: row {r + 2}, column {want[c]}: strain "
+                         f"{float(t[r, c])!r} outside [-1, 1] (the material point is a "
+                         "small-strain driver)")
     return t
 
 

@@ -15,22 +15,7 @@ from pdfem.gauges import Gauges
 from pdfem.io.h5out import RunWriter
 from pdfem.io.restart import Checkpointer
 from pdfem.parallel.mpi import broadcast
-
-
-class Schedule:
-    """Output at the first step at or past each multiple of an interval (exact times are
-    stored with the data; steps are never shortened to land on them)."""
-
-    def __init__(self, interval):
-        self.interval, self.k = interval, 1
-
-    def due(self, t):
-        """True (once) when t has reached the next multiple of the interval."""
-        if t < self.k * self.interval * (1 - 1e-12):
-            return False
-        while self.k * self.interval * (1 - 1e-12) <= t:
-            self.k += 1
-        return True
+from pdfem.schedule import Schedule
 
 
 def energy_row(t, terms, ref, floor):

@@ -91,8 +91,9 @@ def restart_bodies(sim, path):
     (field RESTART_FC) when the checkpoint has them, so that they ride with the nodes."""
     from pdfem.io.checkpoint import read_checkpoint
 
-    ck = read_checkpoint(path, sim.fields, sim.comm)
-    same_scene(path, ck.scene_text, sim.scene.to_toml_string())
+    given = sim.scene.to_toml_string()
+    ck = read_checkpoint(path, sim.fields, sim.comm,
+                         lambda p, saved: same_scene(p, saved, given))
     fields = sim.fields + ([RESTART_FC] if ck.contact_force is not None else [])
     if ck.contact_force is not None:
         ck.batch.a[RESTART_FC.name] = ck.contact_force
@@ -143,8 +144,26 @@ def same_scene(path, saved, given):
             d.get("time", {}).pop(key, None)
     if a == b:
         return
-    for key in sorted(set(a) | set(b)):
-        if a.get(key) != b.get(key):
-            raise InputError(f"--restart: {path} was written for a different scene ([{key}] "
-                             "differs; only [output], [guards], time.end, time.safety, "
-                             "time.dt_min and time.max_steps may change)")
+    raise InputError(f"--restart: {path} was written for a different scene ({_difference(a, b)}; "
+                     "only [output], [guards], time.end, safety, dt_min and max_steps may "
+                     "change)")
+
+
+def _difference(saved, given):
+    """The first table of two scene dicts that differs, in words: one that only one of them
+    has, or the first material (or other named sub-table) that differs."""
+    for key in sorted(set(saved) | set(given)):
+        a, b = saved.get(key), given.get(key)
+        if a == b:
+            continue
+        if a is None or b is None:
+            return f"[{key}] only in {'the checkpoint' if b is None else 'this scene'}"
+        if key == "materials" and isinstance(a, dict) and isinstance(b, dict):
+            for name in sorted(set(a) | set(b)):
+                if a.get(name) != b.get(name):
+                    if name not in a or name not in b:
+                        where = "the checkpoint" if name not in b else "this scene"
+                        return f"material {name} only in {where}"
+                    return f"[materials.{name}] differs"
+        return f"[{key}] differs"
+    return "the scenes differ"

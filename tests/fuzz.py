@@ -1,8 +1,11 @@
 """Mutations of a scene for the fuzz tests: one key or table deleted, a value replaced by a
 wrong type, a negative, zero, NaN, infinite, huge or empty value, a value scaled, an unknown
-key or table added, the text cut short or spliced with garbage."""
+key or table added, the text cut short or spliced with garbage, or a key that sets a schedule
+(an interval, an end, a release or ramp time) given a subnormal, tiny or extreme time."""
 
+import contextlib
 import math
+import signal
 import tomllib
 
 from hypothesis import strategies as st
@@ -19,6 +22,34 @@ INT_FACTORS = [-1, 0, 2, 10**12]
 # Unknown names, some one typo away from a real key or effect
 UNKNOWN = ["bogus", "gama", "viscosityy", "frictional_heating", "heat_", "Domain", "x y",
            "__import__", "!!python/object"]
+# The keys that set a schedule: (table, key) of a scene, and the keys of a [[bc]] item
+SCHEDULE_KEYS = [("time", "end"), ("output", "interval"), ("output", "energy_interval"),
+                 ("output", "gauge_interval"), ("output", "checkpoint_interval"),
+                 ("output", "checkpoint_wall"), ("prepare", "phase_time")]
+BC_SCHEDULE_KEYS = ["release", "ramp_down"]
+# Times for them [s]: the smallest subnormal and others, the smallest normal float, tiny
+# intervals (far below a step, or below the time's own resolution), a step or so, the end
+# of a short run, and huge ones
+EXTREME_TIMES = [5.0e-324, 1.0e-320, 2.2250738585072014e-308, 1.0e-300, 1.0e-20, 1.0e-15,
+                 1.0e-12, 1.0e-9, 1.0e-8, 1.0e-3, 1.0e300, 1.7976931348623157e308]
+
+
+class Hang(Exception):
+    """A command ran past its alarm."""
+
+
+@contextlib.contextmanager
+def alarm(seconds):
+    """Raise Hang in the main thread after ``seconds`` (a hang fails instead of blocking)."""
+    def ring(signum, frame):
+        raise Hang(f"still running after {seconds} s")
+    old = signal.signal(signal.SIGALRM, ring)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
 
 
 def _paths(node, path=()):
@@ -45,13 +76,45 @@ def _scaled(v, k):
     return v * (INT_FACTORS[k % len(INT_FACTORS)] if isinstance(v, int) else FACTORS[k])
 
 
+def schedule_keys(doc):
+    """The schedule keys the scene doc can hold, as key paths: those of SCHEDULE_KEYS whose
+    table it has, and release and ramp_down of each [[bc]] item."""
+    keys = [(t, k) for t, k in SCHEDULE_KEYS if isinstance(doc.get(t), dict)]
+    for i, bc in enumerate(doc.get("bc", []) if isinstance(doc.get("bc"), list) else []):
+        keys += [("bc", i, k) for k in BC_SCHEDULE_KEYS if isinstance(bc, dict)]
+    return keys
+
+
+def schedule_name(path):
+    """A schedule key path as messages name it: output.interval, bc[1].release."""
+    if path[0] == "bc":
+        return f"bc[{path[1]}].{path[2]}"
+    return ".".join(path)
+
+
+@st.composite
+def schedule_mutants(draw, base):
+    """(file bytes, key name, value) of the scene text ``base`` with one schedule key (set or
+    not) given one of EXTREME_TIMES."""
+    doc = tomllib.loads(base)
+    path = draw(st.sampled_from(schedule_keys(doc)))
+    value = draw(st.sampled_from(EXTREME_TIMES))
+    _parent(doc, path)[path[-1]] = value
+    return dumps(doc).encode(), schedule_name(path), value
+
+
 @st.composite
 def mutants(draw, base):
     """(file bytes, what was done) of the scene text ``base`` mutated once."""
     doc = tomllib.loads(base)
     text = dumps(doc)
     kind = draw(st.sampled_from(["replace", "replace", "scale", "delete", "unknown key",
-                                 "unknown table", "truncate", "garbage"]))
+                                 "unknown table", "truncate", "garbage", "schedule"]))
+    if kind == "schedule" and schedule_keys(doc):
+        data, name, value = draw(schedule_mutants(base))
+        return data, f"schedule {name} = {value!r}"
+    if kind == "schedule":
+        return text.encode(), "unchanged"
     if kind == "truncate":
         k = draw(st.integers(0, len(text) - 1))
         return text[:k].encode(), f"truncated at {k}"

@@ -22,7 +22,12 @@ half-written VTU, summary or figure) left behind. The classes:
   HDF5 library: the commands walk it in a child process first, pdfem.io.probe, whose time
   limit LIMITS lowers);
 - any of these commands: garbage, huge or missing option values and output paths that are
-  folders, missing or files.
+  folders, missing or files;
+- cross-scene restarts: ``run --restart`` of a real checkpoint with its own scene mutated once
+  (tests/fuzz.py's mutator, schedule keys included), with only the keys a restart may change
+  changed, or with another scene altogether: it continues (the change was allowed), stops on a
+  guard, or exits 2 with one line of under 200 characters that names the scene or the
+  checkpoint (and, for another scene, the table that differs).
 
 ``PDFEM_FUZZ_EXAMPLES=2000 pytest tests/test_fuzz_commands.py`` runs the long mode (that
 many examples per test instead of the few that keep the suite's run near a minute).
@@ -49,7 +54,9 @@ from pdfem.scene.toml_out import dumps
 from tests.fuzz import mutants
 from tests.scenes import (
     checkpointed_grains,
+    drifting_grains,
     every_field_shock,
+    inline_shock,
     shock_materials,
     small_prepare,
     toml,
@@ -195,9 +202,13 @@ CSV = {"good": "exx,eyy,exy,ezz\n-0.01,0,0,0\n0,0,0,0\n",
        "empty": "", "header only": "exx,eyy,exy,ezz\n", "no header": "-0.01,0,0,0\n",
        "short row": "exx,eyy,exy,ezz\n-0.01,0\n", "nan": "exx,eyy,exy,ezz\nnan,0,0,0\n",
        "text": "exx,eyy,exy,ezz\na,b,c,d\n", "huge": "exx,eyy,exy,ezz\n-1e300,0,0,0\n",
-       "large": "exx,eyy,exy,ezz\n-5,0,0,0\n", "binary": "\x00\x01\x02\xff",
+       "binary": "\x00\x01\x02\xff",
        "columns": "ezz,exy,eyy,exx,extra\n0,0,0,-0.01,7\n",
        "many rows": "exx,eyy,exy,ezz\n" + "-0.001,0,0,0\n" * 200}
+# Strains outside what the small-strain driver can mean (|strain| > 1), put at one row and
+# column of a valid path: refused with one line naming the file, the row and the column
+OUT_OF_RANGE = [-5.0, 5.0, 1.0000001, -1.5, 1.0e3, -1.0e300]
+PATH_COLUMNS = ["exx", "eyy", "exy", "ezz"]
 # Option values: numbers out of range or not numbers at all, and valid ones
 NUMBERS = ["nan", "inf", "-inf", "1e400", "-2", "2", "abc", "", "0", "-0.02", "0.005", "1e-300",
            "-1", "10", "1000000000", "3.5", "0x10", "--", "-"]
@@ -208,7 +219,8 @@ PATH_NAMES = ["uniaxial", "hydrostatic", "triaxial", "load-unload", "bogus", "Un
 @st.composite
 def material_calls(draw):
     """(scene bytes, extra arguments, CSV text or None, what) of a material command."""
-    kind = draw(st.sampled_from(["table", "option", "option", "path", "csv", "out", "name"]))
+    kind = draw(st.sampled_from(["table", "option", "option", "path", "csv", "range", "out",
+                                 "name"]))
     args, csv = [], None
     if kind == "table":
         data, what = draw(mutants(MATERIAL))
@@ -225,6 +237,14 @@ def material_calls(draw):
     elif kind == "csv":
         key = draw(st.sampled_from(sorted(CSV)))
         csv, args, what = CSV[key], ["--path", "<csv>"], f"csv {key}"
+    elif kind == "range":
+        row, col = draw(st.integers(0, 2)), draw(st.integers(0, 3))
+        value = draw(st.sampled_from(OUT_OF_RANGE))
+        rows = [[-0.01, 0.0, 0.0, 0.0], [-0.02, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0]]
+        rows[row][col] = value
+        csv = ",".join(PATH_COLUMNS) + "\n" + "".join(",".join(map(repr, r)) + "\n" for r in rows)
+        args = ["--path", "<csv>"]
+        what = f"range row {row + 2} {PATH_COLUMNS[col]} = {value!r}"
     elif kind == "out":
         out = draw(st.sampled_from(["<folder>", "<missing>/m.csv", "<file>/m.csv", "", "m.csv"]))
         args, what = ["--out", out], f"--out {out}"
@@ -268,6 +288,12 @@ def test_mutated_material_call_runs_or_exits_2(call):
         with _alarm(PREPARE_LIMIT), contextlib.chdir(d):
             status, _, err = _cli(["material", scene] + args)
         out = args[args.index("--out") + 1]
+        if what.startswith("range "):
+            # Out of range: always refused, naming the file, the row and the column
+            _, _, row, col, *_ = what.split()
+            _refused_cleanly(status, err, [f"path.csv: row {row}, column {col}"], what,
+                             before, d)
+            return
         if status == 0:
             rows = Path(d, out).read_text().splitlines()
             assert rows[0].startswith("step,exx") and len(rows) >= 2, what
@@ -495,3 +521,66 @@ def test_odd_command_line_runs_or_exits_2(runs, call):
         names = ["step", "increment"] if status == 3 else [a.split("=")[0] for a in args] + \
             ["runfile: empty", "scene file", "--prefix", "prepare.output", "required: "]
         _refused_cleanly(status, err, names, what, before, d, codes)
+
+
+# ---------------------------------------------------------------- cross-scene restarts
+
+def _restart_base():
+    """The checkpointed scene with time.max_steps bounding a mutated end (a restart may change
+    it): a few hundred steps past the checkpoint at most."""
+    doc = checkpointed_grains()
+    doc["time"]["max_steps"] = 1000
+    return doc
+
+
+RESTART_BASE = toml(_restart_base())
+# Scenes a restart of the checkpoint must refuse, and what their message must name
+OTHER_SCENES = {"three grains": (drifting_grains(n=3, end=1e-7), "[grains] differs"),
+                "a shock scene": (inline_shock(), "differs"),
+                "the shock scene with heat": (every_field_shock(), "differs")}
+
+
+@st.composite
+def restart_calls(draw):
+    """(scene bytes, kind, what) of a restart of the checkpoint of RESTART_BASE."""
+    kind = draw(st.sampled_from(["allowed", "mutant", "mutant", "other"]))
+    if kind == "other":
+        name = draw(st.sampled_from(sorted(OTHER_SCENES)))
+        return toml(OTHER_SCENES[name][0]).encode(), kind, name
+    if kind == "allowed":
+        doc = _restart_base()
+        key, value = draw(st.sampled_from([("end", 1.5e-7), ("safety", 0.3),
+                                           ("max_steps", 10**6), ("dt_min", 1.0e-20)]))
+        doc["time"][key] = value
+        return toml(doc).encode(), kind, f"time.{key} = {value!r}"
+    data, what = draw(mutants(RESTART_BASE))
+    return data, kind, what
+
+
+@_settings(60)
+@given(call=restart_calls())
+def test_restart_of_another_scene_continues_or_exits_2(runs, call):
+    data, kind, what = call
+    with tempfile.TemporaryDirectory() as d:
+        scene, ckpt, out = Path(d, "s.toml"), Path(d, "c.ckpt.h5"), Path(d, "out.h5")
+        scene.write_bytes(data)
+        shutil.copy(runs / "run.h5.ckpt.h5", ckpt)
+        before = _state(d)
+        with _alarm(PREPARE_LIMIT):
+            status, _, err = _cli(["run", scene, "-o", out, "--restart", ckpt, "--quiet"])
+        assert "Traceback" not in err, (what, err)
+        if kind == "allowed":
+            assert status == 0, (what, err)
+        if status == 0:
+            with h5py.File(out) as f:
+                assert f["frames/time"].shape[0] >= 1, what
+            _no_partial(d, what)
+            return
+        if status == 3:
+            assert err.strip().splitlines()[-1].startswith("pdfem: error: step "), (what, err)
+            return
+        _refused_cleanly(status, err, [scene, ckpt], what, before, d)
+        # A refused restart (not a refused scene, whose lists of known keys may be longer)
+        assert "--restart" not in err or len(err.strip()) < 200, (what, err)
+        if kind == "other":
+            assert "different scene" in err and OTHER_SCENES[what][1] in err, (what, err)

@@ -178,9 +178,11 @@ class Checkpoint:
         self.contact_force = contact_force
 
 
-def read_checkpoint(path, fields, comm=None):
+def read_checkpoint(path, fields, comm=None, scene_check=None):
     """Read a checkpoint (collective on ``comm``, default this process alone); InputError
-    naming the file, on every rank, when it cannot be used.
+    naming the file, on every rank, when it cannot be used. ``scene_check(path, scene_text)``,
+    when given, judges the checkpoint's scene before its fields are compared with ``fields``
+    (a scene that differs is named by what differs, not by the fields that follow from it).
 
     Read by schema: attributes are JSON and TOML text, datasets numbers of the fields'
     shapes; a file that lacks an entry or whose rows do not add up is refused, never half
@@ -189,7 +191,7 @@ def read_checkpoint(path, fields, comm=None):
     comm = comm if comm is not None else MPI.COMM_SELF
     out, msg = None, None
     try:
-        out = _read(path, fields, comm)
+        out = _read(path, fields, comm, scene_check)
     except InputError as exc:
         msg = str(exc)
     # Every rank refuses when one does (each reads other rows)
@@ -199,7 +201,7 @@ def read_checkpoint(path, fields, comm=None):
     return out
 
 
-def _read(path, fields, comm):
+def _read(path, fields, comm, scene_check):
     """:func:`read_checkpoint` on one rank."""
     try:
         with h5py.File(path, "r", driver="mpio", comm=comm) as f:
@@ -207,6 +209,8 @@ def _read(path, fields, comm):
                 raise InputError(f"--restart: {path} is not a pdfem checkpoint of this version "
                                  f"(format {f.attrs.get('format')}; this version reads "
                                  f"{FORMAT})")
+            if scene_check is not None:
+                scene_check(path, str(f.attrs["scene"]))
             names = json.loads(f.attrs["fields"])
             if names != [fl.name for fl in fields]:
                 raise InputError(f"--restart: {path} holds fields {names}; this scene needs "

@@ -17,6 +17,7 @@ from pdfem import sigterm
 from pdfem.errors import InputError
 from pdfem.io.checkpoint import write_checkpoint
 from pdfem.io.segments import valid_segments
+from pdfem.schedule import next_index
 
 
 @contextmanager
@@ -63,8 +64,7 @@ class Checkpointer:
             return False
         want = sim.stop_requested or sim.checkpoint_requested
         if self.interval > 0 and sim.t >= self.k * self.interval * (1 - 1e-12):
-            while self.k * self.interval * (1 - 1e-12) <= sim.t:
-                self.k += 1
+            self.k = next_index(self.k, self.interval, sim.t)
             want = True
         return want
 

@@ -33,7 +33,9 @@ def cell_reach(comm, store, grid, nglobal, skin):
     their centroids, at most, over every rank (collective): two boxes within skin have
     centroids at most D_i + D_j + skin apart per axis, D the distance from a grain's centroid
     to the farthest side of its box, and points that far apart lie at most
-    ceil(distance / cell width) cells apart. At least 1."""
+    ceil(distance / cell width) cells apart. At least 1, at most the grid's larger side (a
+    reach that wide already covers every cell: a grain torn across the box by a run that the
+    guards are about to stop must not size arrays beyond memory)."""
     n = store.nb_own - nglobal
     far = 0.0
     if n:
@@ -47,7 +49,9 @@ def cell_reach(comm, store, grid, nglobal, skin):
         far_y = np.maximum(cent[:, 1] - lo[:, 1], hi[:, 1] - cent[:, 1]).max() / grid.hy
         far = max(far_x, far_y)
     skin_cells = skin / min(grid.hx, grid.hy)
-    return max(1, math.ceil(2.0 * global_max(comm, far) + skin_cells))
+    reach = 2.0 * global_max(comm, far) + skin_cells
+    widest = max(grid.nx, grid.ny)
+    return max(1, math.ceil(reach)) if reach < widest else widest
 
 
 def neighbour_ranks(grid, owner, cells, reach=1):

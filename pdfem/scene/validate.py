@@ -14,6 +14,7 @@ from pathlib import Path
 from pdfem.scene import schema as S
 from pdfem.scene.grains_file import read_grains_file
 from pdfem.scene.placement import check_geometry, grain_arrays
+from pdfem.scene.schedules import check_schedules
 from pdfem.scene.values import SceneError, array_of_tables, check_table, join, show, table
 
 _NAME = re.compile(S.NAME_PATTERN)
@@ -88,6 +89,7 @@ def resolve(doc, base_dir):
     if r["guards"]["cap_contact"] != "off" and "contact" not in r:
         raise SceneError("guards.cap_contact", "needs the [contact] table")
     r["run"] = check_table(doc.get("run", {}), S.RUN, "run")
+    check_schedules(r, doc.get("output", {}))
     # Geometry at t=0
     if rows is not None and "nodes" in rows.arrays:
         if r["grains"]:

@@ -74,11 +74,25 @@ FILES = {
         "velocity": [0.0, 1.0e300]}])),
     "prep-zero.toml": _prep(lambda d: d["prepare"].update(grains=0)),
     "one-cell.toml": _good(lambda d: d["domain"].update(cell_size=0.02)),
-    "steps.toml": _good(lambda d: d["time"].update(end=1000.0)),
+    "steps.toml": _good(lambda d: (d["time"].update(end=1000.0),
+                                   d["output"].update(interval=10.0, energy_interval=1.0,
+                                                      gauge_interval=1.0,
+                                                      checkpoint_interval=10.0))),
     "mat-text.toml": "[materials]\nhmx = \"text\"\n",
     "prep-vast.toml": dumps(small_prepare(semi_axis=[1.2e296, 1.6e296])),
     "prep-thin.toml": dumps(small_prepare(height=1.0e-9)),
     "strains.csv": "exx,eyy,exy,ezz\n-0.01,0,0,0\n",
+    "big-strain.csv": "exx,eyy,exy,ezz\n-0.01,0,0,0\n-5,0,0,0\n",
+    "frames-1e-20.toml": _good(lambda d: d["output"].update(interval=1e-20)),
+    "frames-denormal.toml": _good(lambda d: d["output"].update(interval=5e-324)),
+    "frames-per-step.toml": _good(lambda d: d["output"].update(interval=1e-7 / 4.8e6)),
+    "ckpt-denormal.toml": _good(lambda d: d["output"].update(checkpoint_interval=5e-324)),
+    "energy-denormal.toml": _good(lambda d: d["output"].update(energy_interval=5e-324)),
+    "energy-no-advance.toml": _good(lambda d: d["output"].update(energy_interval=1e-24)),
+    "gauge-denormal.toml": _good(lambda d: d["output"].update(gauge_interval=5e-324)),
+    "end-denormal.toml": _good(lambda d: d["time"].update(end=5e-324)),
+    "visc.toml": _good(lambda d: d.update(bulk_viscosity={})),
+    "stiffer.toml": _good(lambda d: d["materials"]["grain"].update(bulk=2.0e10)),
     "notafolder": "a plain file\n",
     "keep-0000.vtu": "precious\n",
     "keep.csv": "precious\n",
@@ -96,7 +110,8 @@ def folder(tmp_path_factory):
     for name, text in FILES.items():
         (d / name).write_text(text)
     (d / "adir").mkdir()
-    for args in (["run", "good.toml", "-o", "good.h5"], ["run", "fields.toml", "-o", "sh.h5"]):
+    for args in (["run", "good.toml", "-o", "good.h5"], ["run", "fields.toml", "-o", "sh.h5"],
+                 ["run", "visc.toml", "-o", "visc.h5"]):
         p = pdfem(args + ["--quiet"], d)
         assert p.returncode == 0, p.stderr
     for src, dst in (("good.h5", "trunc.h5"), ("good.h5.ckpt.h5", "trunc.ckpt.h5")):
@@ -342,6 +357,49 @@ def _one_error_line(p, text):
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("pdfem: error: "), p.stderr
     assert text in lines[0], (text, lines[0])
+
+
+# Schedules, cross-scene restarts and strain paths: the line also stays under 200 characters
+SHORT_CASES = {
+    "run frames 1e-20": (["run", "frames-1e-20.toml", "-o", "r.h5"],
+                         "output.interval: 1e-20 s over time.end = 1e-07 s implies 1e+13 frames"),
+    "run frames subnormal": (["run", "frames-denormal.toml", "-o", "r.h5"],
+                             "output.interval: 5e-324 s is subnormal"),
+    "run frames shorter than a step": (["run", "frames-per-step.toml", "-o", "r.h5"],
+                                       "implies 4.8e+06 frames, more than 1e+06"),
+    "run checkpoints subnormal": (["run", "ckpt-denormal.toml", "-o", "r.h5"],
+                                  "output.checkpoint_interval: 5e-324 s is subnormal"),
+    "run energy subnormal": (["run", "energy-denormal.toml", "-o", "r.h5"],
+                             "output.energy_interval: 5e-324 s is subnormal"),
+    "run energy below the time's advance": (["run", "energy-no-advance.toml", "-o", "r.h5"],
+                                            "output.energy_interval: 1e-24 s is below the "
+                                            "smallest advance of the time at time.end"),
+    "run gauges subnormal": (["run", "gauge-denormal.toml", "-o", "r.h5"],
+                             "output.gauge_interval: 5e-324 s is subnormal"),
+    "run end subnormal": (["run", "end-denormal.toml", "-o", "r.h5"],
+                          "time.end: 5e-324 s is subnormal"),
+    "run restart other effects": (["run", "visc.toml", "-o", "r.h5", "--restart",
+                                   "good.h5.ckpt.h5"], "([bulk_viscosity] only in this scene"),
+    # The checkpoint holds the viscosity's fields (qv, ewq) that this scene lacks
+    "run restart checkpoint of other effects": (["run", "good.toml", "-o", "r.h5", "--restart",
+                                                 "visc.h5.ckpt.h5"],
+                                                "([bulk_viscosity] only in the checkpoint"),
+    "run restart other material": (["run", "stiffer.toml", "-o", "r.h5", "--restart",
+                                    "good.h5.ckpt.h5"], "([materials.grain] differs"),
+    "material path beyond small strain": (["material", "prep.toml", "--material", "hmx",
+                                           "--path", "big-strain.csv", "--out", "m.csv"],
+                                          "big-strain.csv: row 3, column exx: strain -5.0"),
+}
+
+
+@pytest.mark.parametrize("case", list(SHORT_CASES))
+def test_schedule_restart_and_path_cases_one_short_line(folder, case):
+    args, text = SHORT_CASES[case]
+    before = _state(folder)
+    p = pdfem(args, folder, timeout=60)
+    _one_error_line(p, text)
+    assert len(p.stderr.strip()) < 200, p.stderr
+    assert _state(folder) == before
 
 
 @pytest.mark.parametrize("case", list(CASES))

@@ -206,13 +206,16 @@ def _convergence(args):
 
 
 def _hard_args(p):
-    from pdfem.tools.study.hard_cases import CASES, LARGE_ONLY
+    from pdfem.tools.study.hard_cases import CASES, LADDER_CASES, LADDERS, LARGE_ONLY
 
     p.add_argument("--size", choices=("ci", "large"), default="large", help="ci: the "
                    "seconds-long versions the test suite runs; large: the study's (default)")
+    singles = [c for c in CASES if c not in LADDER_CASES]
+    large = ", ".join(c for c in LARGE_ONLY if c in singles)
+    ladders = "; ".join(k + " = " + ", ".join(v) for k, v in LADDERS.items())
     p.add_argument("--case", default="all", help="comma-separated case names or all "
-                   f"(the cases: {', '.join(CASES)}; {', '.join(LARGE_ONLY)} only with "
-                   "--size large)")
+                   f"(the cases: {', '.join(singles)}; {large} only with --size large; the "
+                   f"ladders, --size large and only by name: {ladders})")
     p.add_argument("-p", "--prefix", default="study-hard", help="runs go to <prefix>-runs/, "
                    "the table to <prefix>.json (default study-hard)")
     p.add_argument("--force", action="store_true", help="overwrite existing output")
@@ -223,7 +226,7 @@ def _hard(args):
 
     from pdfem.parallel.mpi import barrier, world
     from pdfem.tools.study.hard import print_rows, run_case
-    from pdfem.tools.study.hard_cases import CASES, LARGE_ONLY
+    from pdfem.tools.study.hard_cases import CASES, LADDER_CASES, LADDERS, LARGE_ONLY
 
     comm = world()
     if comm.size < 2:
@@ -232,11 +235,15 @@ def _hard(args):
     names = [c for c in CASES if args.size == "large" or c not in LARGE_ONLY]
     if args.case != "all":
         asked = [c.strip() for c in args.case.split(",") if c.strip()]
+        # A ladder's name stands for its rungs
+        asked = [r for c in asked for r in (LADDERS[c] if c in LADDERS else [c])]
         bad = [c for c in asked if c not in names]
         if bad or not asked:
             raise InputError(f"--case: {bad[0] if bad else args.case!r} is not a case of "
                              f"--size {args.size} ({', '.join(names)})")
         names = asked
+    else:
+        names = [c for c in names if c not in LADDER_CASES]
     from pdfem.cli.paths import check_output_path
 
     check_output_path(args.prefix + ".json", args.force, "--prefix")

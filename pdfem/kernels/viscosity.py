@@ -15,7 +15,15 @@ matches central differences (a force at t_n works over [t_{n-1/2}, t_{n+1/2}]):
     ewq += (q_old + q) (A_old - A) / 2,
 
 which the energy balance counts as dissipated. The stable step is reduced with the usual
-bound dt_e = L_e / (Q + sqrt(Q^2 + c^2)), Q = c_lin c + c_quad L |rate| while compressing.
+bound for a viscosity of the element's own length, dt_e = L_e / (Q + sqrt(Q^2 + c^2)), with
+L_e = A / longest diagonal (the elastic step's length, the element's thinnest extent) and
+
+    Q = (L / L_e) (c_lin c + c_quad L |rate|)   while compressing.
+
+The factor L / L_e makes the bound that of the viscosity as defined, on L = sqrt(A): written
+over L_e, q = rho L_e ((L/L_e) c_lin c |rate| + (L/L_e) c_quad L rate^2), i.e. coefficients
+L/L_e times larger. It is sqrt(2) for a square and grows as sqrt(aspect) for a sliver, where
+a bound without it would allow steps several times too long (a viscous instability).
 Before the first step there is no area change yet; the bound of the first step takes the
 rate of the initial velocities, (dA/dt) / A with dA/dt the derivative of the area along them
 (zero, exactly, for a body that moves rigidly in translation), so that a velocity condition
@@ -121,6 +129,9 @@ def bulk_viscosity_dt(x, du, conn, emat, mat_params, sig, e0, e1, dt, c_quad, c_
         a_now, le = element_length(x, conn, e)
         if first:
             a = a_now
-        big_q = c_lin * c - c_quad * np.sqrt(a) * rate
+        if le <= 0.0:
+            return 0.0
+        lv = np.sqrt(a)
+        big_q = (lv / le) * (c_lin * c - c_quad * lv * rate)
         out = min(out, le / (big_q + np.sqrt(big_q * big_q + c * c)))
     return out

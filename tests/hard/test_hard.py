@@ -35,3 +35,28 @@ def test_study_hard_bad_input(tmp_path):
         lines = p.stderr.strip().splitlines()
         assert p.returncode == 2 and len(lines) == 1 and f"--case: {case!r}" in lines[0], p.stderr
     assert not list(tmp_path.iterdir())
+
+
+def test_ladders_are_named_rungs_of_valid_scenes():
+    """Each rung of the speed and refinement ladders is the small bed's piston at its speed
+    and level with the EOS and the potential law, a valid scene; the ladders run only by name
+    and only at the large size."""
+    from pdfem.scene import parse_scene
+    from pdfem.tools.study.hard_cases import LADDER_CASES, LADDERS
+
+    rungs = {r for v in LADDERS.values() for r in v}
+    assert rungs == set(LADDER_CASES) and rungs <= set(LARGE_ONLY)
+    for name in rungs:
+        doc = CASES[name][0](None, "large")
+        speed = -doc["bc"][-1]["velocity"][1]
+        level = doc["element"]["level"]
+        assert name in (f"speed-{speed:g}", f"refine-{speed:g}-l{level}")
+        assert name.startswith("refine") or level == 2
+        assert doc["contact"]["law"] == "potential"
+        assert doc["materials"]["hmx"]["eos"] == "us_up"
+        parse_scene(doc, name=name)
+
+
+def test_a_ladder_is_refused_at_ci_size(tmp_path):
+    p = pdfem(["study", "hard", "--size", "ci", "--case", "speeds"], tmp_path, ranks=2)
+    assert p.returncode == 2 and "'speed-100' is not a case of --size ci" in p.stderr, p.stderr

@@ -3,7 +3,8 @@
 Each case is a function ``(folder, size) -> scene dict`` (tomllib form; SI units, stresses
 tension positive) writing any file it needs (a bed file) into ``folder``. ``size`` is "ci"
 (seconds, for the test suite) or "large" (the study). :data:`CASES` lists them with one line
-each; :data:`LARGE_ONLY` are too long for the test suite.
+each; :data:`LARGE_ONLY` are too long for the test suite. :data:`LADDERS` groups the speed
+and refinement ladders, which run only when named (``--case speeds``), not with "all".
 """
 
 import copy
@@ -112,11 +113,36 @@ def piston_2000_eos(folder, size):
 
 
 def piston_1500_potential(folder, size):
-    """The piston at 1500 m/s on the scene's own kite meshes and linear bulk with the potential
-    contact law: level 2 for 0.13 us at CI size (past the area law's stop at 0.119 us, an
-    element inside another), level 3 to the scene's end for large."""
-    return _piston(size, 1500.0, 3, level_ci=2, end_ci=1.3e-7, mesh="kite", eos=False,
-                   law="potential")
+    """The piston at 1500 m/s on the scene's own kite meshes with the potential contact law:
+    level 2 with the linear bulk for 0.13 us at CI size (past the area law's stop at 0.119
+    us, an element inside another); level 3 to the scene's end for large, the crystal on its
+    Hugoniot (with the linear bulk the crushed crystal inverts an element at 0.84 us)."""
+    if size == "ci":
+        return _piston(size, 1500.0, 3, level_ci=2, end_ci=1.3e-7, mesh="kite", eos=False,
+                       law="potential")
+    return _piston(size, 1500.0, 3, mesh="kite", eos=True, law="potential")
+
+
+def _ladder(speed, level):
+    """A rung of the ladders: the small bed's piston at ``speed`` on kite meshes of ``level``,
+    the crystal on its Hugoniot, the potential contact law, to the scene's end (large only)."""
+    def case(folder, size):
+        return _piston(size, speed, level, mesh="kite", eos=True, law="potential")
+    case.__doc__ = (f"The piston at {speed:g} m/s on kite meshes of level {level}, the crystal "
+                    "on its Hugoniot, the potential contact law.")
+    return case
+
+
+# The ladders (large only, run by name): every speed at the scene's level 2, and the mesh
+# levels at 1500 m/s
+SPEEDS = (100.0, 288.0, 500.0, 1000.0, 1500.0, 2000.0)
+LEVELS = (1, 2, 3, 4)
+LADDER_CASES = {f"speed-{v:g}": (_ladder(v, 2), f"piston at {v:g} m/s, level 2, EOS, "
+                                 "potential law") for v in SPEEDS}
+LADDER_CASES.update({f"refine-1500-l{n}": (_ladder(1500.0, n), f"piston at 1500 m/s, level {n}, "
+                                           "EOS, potential law") for n in LEVELS})
+LADDERS = {"speeds": [f"speed-{v:g}" for v in SPEEDS],
+           "refinement": [f"refine-1500-l{n}" for n in LEVELS]}
 
 
 def stiff_contact(folder, size):
@@ -343,4 +369,5 @@ CASES = {
     "hot-conduction": (hot_conduction, "heat with a conduction limit tighter than dt"),
     "settle-1e6": (settle_long, "10^6 steps of settling"),
 }
-LARGE_ONLY = ("settle-1e6",)
+CASES.update(LADDER_CASES)
+LARGE_ONLY = ("settle-1e6",) + tuple(LADDER_CASES)

@@ -423,6 +423,9 @@ def _export_or_analyse(data, runs, command):
         shutil.copy(runs / src, path)
         what = f"{src}: " + _mutate(path, data, _members(runs / src))
         args = [command, path]
+        if command == "hotspots":
+            # Figures in one example of three (their drawing is most of an example's time)
+            args += ["--plots", data.draw(st.sampled_from(["none", "none", "png"]))]
         if command == "export":
             args += ["--format", data.draw(st.sampled_from(["vtu", "vtu", "xdmf", "vtk"]))]
             args += ["--frames", data.draw(st.sampled_from(["all", "last", "0", "1,-1"]))]

@@ -165,6 +165,15 @@ def test_the_packaged_preparations_are_within_the_limits():
         assert abs(n - made) <= 0.06 * made and n < MAX_GEOMETRIC_GRAINS / 1000, (name, n, made)
 
 
+def _long():
+    """The small shot-912 scene run for 1000 s (about 4e12 steps), its outputs scaled with it
+    (the packaged intervals would imply more frames than a run may hold)."""
+    doc = packaged("shot912_small.toml")
+    doc["time"]["end"] = 1.0e3
+    doc["output"].update(interval=50.0, energy_interval=5.0, gauge_interval=0.5)
+    return doc
+
+
 def test_check_runs_builds_nothing_with_allow_huge():
     """--allow-huge passes a plan whose runs would be refused without it."""
     from pdfem.errors import InputError
@@ -172,9 +181,7 @@ def test_check_runs_builds_nothing_with_allow_huge():
     from pdfem.parallel.mpi import world
     from pdfem.scene import parse_scene
 
-    doc = packaged("shot912_small.toml")
-    doc["time"]["end"] = 1.0e3
-    scene = parse_scene(doc, name="long")
+    scene = parse_scene(_long(), name="long")
     with pytest.raises(InputError, match="long: time.end: about"):
         check_runs([(scene, "long")], world())
     check_runs([(scene, "long")], world(), allow_huge=True)
@@ -194,7 +201,5 @@ def test_check_runs_passes_over_a_run_whose_set_up_stops_on_a_guard():
     stops = parse_scene(doc, name="stops")
     with pytest.raises(SimulationError, match="below time.dt_min"):
         Simulation(stops, world())
-    doc = packaged("shot912_small.toml")
-    doc["time"]["end"] = 1.0e3
     with pytest.raises(InputError, match="long: time.end: about"):
-        check_runs([(stops, "stops"), (parse_scene(doc, name="long"), "long")], world())
+        check_runs([(stops, "stops"), (parse_scene(_long(), name="long"), "long")], world())

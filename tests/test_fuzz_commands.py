@@ -39,7 +39,6 @@ import io
 import math
 import os
 import shutil
-import signal
 import tempfile
 from pathlib import Path
 
@@ -51,7 +50,7 @@ from hypothesis import strategies as st
 
 from pdfem.cli import main
 from pdfem.scene.toml_out import dumps
-from tests.fuzz import mutants
+from tests.fuzz import alarm, mutants
 from tests.scenes import (
     checkpointed_grains,
     drifting_grains,
@@ -148,24 +147,6 @@ def _prepare_base():
 PREPARE = _prepare_base()
 
 
-class _Hang(Exception):
-    """A command ran past its alarm."""
-
-
-@contextlib.contextmanager
-def _alarm(seconds):
-    """Raise _Hang in the main thread after ``seconds`` (a hang fails instead of blocking)."""
-    def ring(signum, frame):
-        raise _Hang(f"still running after {seconds} s")
-    old = signal.signal(signal.SIGALRM, ring)
-    signal.alarm(seconds)
-    try:
-        yield
-    finally:
-        signal.alarm(0)
-        signal.signal(signal.SIGALRM, old)
-
-
 def test_the_prepare_base_prepares():
     with tempfile.TemporaryDirectory() as d:
         Path(d, "p.toml").write_text(PREPARE)
@@ -183,7 +164,7 @@ def test_mutated_prepare_scene_prepares_or_exits_2(mutant):
         scene, bed = Path(d, "p.toml"), Path(d, "bed.h5")
         scene.write_bytes(data)
         before = _state(d)
-        with _alarm(PREPARE_LIMIT):
+        with alarm(PREPARE_LIMIT):
             status, _, err = _cli(["prepare", scene, "-o", bed])
         if status == 0:
             # Still a valid preparation: a complete bed file
@@ -285,7 +266,7 @@ def test_mutated_material_call_runs_or_exits_2(call):
         if "--out" not in args:
             args += ["--out", os.path.join(d, "out.csv")]
         before = _state(d)
-        with _alarm(PREPARE_LIMIT), contextlib.chdir(d):
+        with alarm(PREPARE_LIMIT), contextlib.chdir(d):
             status, _, err = _cli(["material", scene] + args)
         out = args[args.index("--out") + 1]
         if what.startswith("range "):
@@ -430,7 +411,7 @@ def _export_or_analyse(data, runs, command):
             args += ["--format", data.draw(st.sampled_from(["vtu", "vtu", "xdmf", "vtk"]))]
             args += ["--frames", data.draw(st.sampled_from(["all", "last", "0", "1,-1"]))]
         before = _state(d)
-        with _alarm(PREPARE_LIMIT):
+        with alarm(PREPARE_LIMIT):
             status, _, err = _cli(args)
         if status == 0:
             _no_partial(d, what)
@@ -513,7 +494,7 @@ def test_odd_command_line_runs_or_exits_2(runs, call):
             args += [defaults[0], os.path.join(d, defaults[1])]
         before = _state(d)
         # Relative paths (an odd value taken as a prefix) land in the example's folder
-        with _alarm(PREPARE_LIMIT), contextlib.chdir(d):
+        with alarm(PREPARE_LIMIT), contextlib.chdir(d):
             status, _, err = _cli([command] + args)
         if status == 0:
             _no_partial(d, what)
@@ -569,7 +550,7 @@ def test_restart_of_another_scene_continues_or_exits_2(runs, call):
         scene.write_bytes(data)
         shutil.copy(runs / "run.h5.ckpt.h5", ckpt)
         before = _state(d)
-        with _alarm(PREPARE_LIMIT):
+        with alarm(PREPARE_LIMIT):
             status, _, err = _cli(["run", scene, "-o", out, "--restart", ckpt, "--quiet"])
         assert "Traceback" not in err, (what, err)
         if kind == "allowed":

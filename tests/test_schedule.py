@@ -52,23 +52,16 @@ def test_ramp_below_the_advance_at_release_refused():
 
     with pytest.raises(InputError, match=r"bc\[3\]\.ramp_down: 1e-30 s is below the smallest "
                        "advance of the time"):
-        parse_scene(_scene(edit), packaged_dir())
+        parse_scene(_scene(edit))
 
 
 def test_derived_interval_that_underflows_refused():
     # time.end 1e-306: output.interval derives as end / 20, energy and gauge intervals below
     with pytest.raises(InputError, match=r"output.energy_interval: .* s \(from output.interval "
                        r"/ 10\) is subnormal"):
-        parse_scene(_scene(lambda d: (d["time"].update(end=1e-306), d.pop("output"))),
-                    packaged_dir())
+        parse_scene(_scene(lambda d: (d["time"].update(end=1e-306), d.pop("output"))))
 
 
 def test_packaged_scenes_pass():
     for name in ("shot912.toml", "shot912_small.toml"):
-        parse_scene(packaged(name), packaged_dir())
-
-
-def packaged_dir():
-    from importlib import resources
-
-    return str(resources.files("pdfem") / "scenes")
+        parse_scene(packaged(name))

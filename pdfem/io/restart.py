@@ -17,7 +17,7 @@ from pdfem import sigterm
 from pdfem.errors import InputError
 from pdfem.io.checkpoint import write_checkpoint
 from pdfem.io.segments import valid_segments
-from pdfem.schedule import next_index
+from pdfem.schedule import Schedule
 
 
 @contextmanager
@@ -48,11 +48,20 @@ class Checkpointer:
     def __init__(self, sim, out_path, out):
         self.sim, self.path = sim, out_path + ".ckpt.h5"
         self.interval, self.wall = out["checkpoint_interval"], out["checkpoint_wall"]
-        self.k = 1
+        self.schedule = Schedule(self.interval)
         self.last = time.perf_counter()
         self.state = sim.checkpoint.state if sim.restarted else {}
         if sim.restarted:
             self.k = self.state["checkpoint_k"]
+
+    @property
+    def k(self):
+        """Index of the next checkpoint multiple of the interval (stored in checkpoints)."""
+        return self.schedule.k
+
+    @k.setter
+    def k(self, value):
+        self.schedule.k = value
 
     def due(self, at_end):
         """True when a checkpoint is to be written after this step (same on every rank)."""
@@ -63,8 +72,7 @@ class Checkpointer:
         if at_end:
             return False
         want = sim.stop_requested or sim.checkpoint_requested
-        if self.interval > 0 and sim.t >= self.k * self.interval * (1 - 1e-12):
-            self.k = next_index(self.k, self.interval, sim.t)
+        if self.interval > 0 and self.schedule.due(sim.t):
             want = True
         return want
 

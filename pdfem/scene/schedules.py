@@ -22,10 +22,9 @@ DERIVED = {"interval": "time.end / 20", "energy_interval": "output.interval / 10
            "gauge_interval": "output.energy_interval / 10"}
 
 
-def _normal(path, value, given=True, origin=""):
-    """SceneError unless value is 0 or a normal float."""
+def _normal(path, value, how=""):
+    """SceneError unless value is 0 or a normal float; how: where a derived value comes from."""
     if value != 0.0 and abs(value) < sys.float_info.min:
-        how = "" if given else f" (from {origin})"
         raise SceneError(path, f"{show(value)} s{how} is subnormal, below "
                          f"{sys.float_info.min:.3g} s: no run resolves such a time")
 
@@ -46,18 +45,18 @@ def check_schedules(r, given_output):
     for key, (limit, what) in MAX_COUNT.items():
         path = f"output.{key}"
         iv = o[key]
-        given = key in given_output
         if key == "checkpoint_interval" and iv == 0.0:
             continue
+        # The schema checks a given interval; a derived one (the others) may underflow
+        how = "" if key in given_output else f" (from {DERIVED[key]})"
         if not iv > 0.0:
-            raise SceneError(path, f"{show(iv)} s (from {DERIVED[key]}) must be > 0")
-        _normal(path, iv, given, DERIVED.get(key, ""))
+            raise SceneError(path, f"{show(iv)} s{how} must be > 0")
+        _normal(path, iv, how)
         _advances(path, iv, end, "time.end")
         count = end / iv
         if r["time"]["max_steps"]:
             count = min(count, r["time"]["max_steps"] + 1)
         if count > limit:
-            how = "" if given else f" (from {DERIVED[key]})"
             raise SceneError(path, f"{show(iv)} s{how} over time.end = {show(end)} s implies "
                              f"{count:.3g} {what}, more than {limit:.0e}")
     _normal("output.checkpoint_wall", o["checkpoint_wall"])

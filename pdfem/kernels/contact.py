@@ -88,7 +88,12 @@ from pdfem.kernels.contact_law import (
     normal_force,
     shear_update,
 )
-from pdfem.kernels.contact_potential import corner_extent, pair_potential, wall_potential
+from pdfem.kernels.contact_potential import (
+    corner_box,
+    corner_extent,
+    pair_potential,
+    wall_potential,
+)
 from pdfem.kernels.overlap import (
     K_P,
     K_Q,
@@ -104,6 +109,10 @@ from pdfem.kernels.overlap import (
     alloc_clip_buffers,
     halfplane_into,
 )
+
+# Relative margin (of the elements' size) beyond which a contact's width or centroid is out of
+# its elements' bounds: far above rounding, far below any true overlap's size
+BOUND_TOL = 1e-9
 
 # Columns of res[p, :]
 R_FN = 0  # normal force on A along n, tension positive (<= 0) [N/m]
@@ -477,6 +486,22 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                     if not wall:
                         width = min(width, corner_extent(xb, -ny, nx))
                     st = OV_OK
+        if st == OV_OK:
+            # The overlap lies in both elements: its centroid within their common box and its
+            # width within their extents along the tangent (the clip of an element that crosses
+            # itself, which a folded corner makes, can put both anywhere)
+            lx, hx, ly, hy, ext = corner_box(xa, -ny, nx)
+            if not wall:
+                bx, bhx, by, bhy, bext = corner_box(xb, -ny, nx)
+                lx, hx, ly, hy, ext = (max(lx, bx), min(hx, bhx), max(ly, by), min(hy, bhy),
+                                       min(ext, bext))
+            # (beyond a rounding margin: a true overlap keeps every bit it had)
+            tol = BOUND_TOL * max(hx - lx, hy - ly, ext)
+            if width > ext + tol:
+                width = ext
+            if cx < lx - tol or cx > hx + tol or cy < ly - tol or cy > hy + tol:
+                cx = min(max(cx, lx), hx)
+                cy = min(max(cy, ly), hy)
         if st == OV_NONE:
             if dense:
                 _clear(r, 0.0, C_NONE, active, nodes, weights, fnod, us_out, res)

@@ -37,7 +37,9 @@ element Q):
   triangles' inner edges cancel between neighbours (the same psi and the same motion);
 - moving S's nodes sweeps the domain along the polygon's edges on S's boundary: node i of the
   edge (i, i+1) gets int psi_T N_i n ds, psi_T and the hat N_i both linear along the edge.
-Triangles of non-positive orientation (an element folded at its centroid) hold no potential.
+Triangles of non-positive orientation (a corner pushed past the element's centroid) hold no
+potential. Then the inner edges they share with their positive neighbours no longer cancel, and
+the domain's edges on them carry the term of the host's motion sweeping them, as S's edges do.
 
 Sign: W >= 0; g receives +dW/dx (the energy's gradient; the force is its negative).
 """
@@ -143,11 +145,90 @@ def sweep_gradient(xs, px, py, pt, n, fx, fy, f0, fz, g, rs):
 
 
 @njit(cache=True)
+def folded_triangles(xq, tri):
+    """Bit k set when triangle k of the quad xq (element_triangle) holds no potential."""
+    bits = 0
+    for k in range(4):
+        if not element_triangle(xq, k, tri) > 0.0:
+            bits |= 1 << k
+    return bits
+
+
+@njit(cache=True)
+def neighbour_bits(k):
+    """Bits of the triangles sharing an inner edge with triangle k: k + 1 across its edge
+    (corner k + 1, centroid), k - 1 across (centroid, corner k)."""
+    return (1 << ((k + 1) & 3)) | (1 << ((k + 3) & 3))
+
+
+@njit(cache=True)
+def retag_subject_edges(pt, n):
+    """Tags of a triangle clipped as the subject by a half-plane (slot 0, n vertices): its
+    edge i becomes clip line i (T_SRC = -1 - i) and the half-plane's line -4, as clip_into
+    tags a subject clipped by the triangle, for inner_edge_gradient."""
+    for i in range(n):
+        src = pt[0, i, T_SRC]
+        pt[0, i, T_SRC] = -1 - src if src >= 0 else -4
+
+
+@njit(cache=True)
+def inner_edge_gradient(tri, k, folded, px, py, pt, n, fx, fy, f0, fz, g, rq):
+    """Add to g rows rq..rq+3 the sweep of the polygon in slot 0 along the inner edges of the
+    host's triangle k (tri; clip line 1: corner k + 1 -> centroid, 2: centroid -> corner k)
+    whose neighbour across is folded (bits of folded_triangles); the field is
+    fz (f0 + fx x + fy y). The centroid's share goes a quarter to each corner."""
+    k1 = (k + 1) & 3
+    for i in range(n):
+        line = -1 - pt[0, i, T_SRC]
+        if line == 1:
+            if not folded & (1 << k1):
+                continue
+            a, b = 1, 2
+        elif line == 2:
+            if not folded & (1 << ((k + 3) & 3)):
+                continue
+            a, b = 2, 0
+        else:
+            continue
+        i1 = i + 1 if i + 1 < n else 0
+        # Outward normal x length of the polygon edge, and the field at its ends
+        ex = py[0, i1] - py[0, i]
+        ey = px[0, i] - px[0, i1]
+        fa = fz * (f0 + fx * px[0, i] + fy * py[0, i])
+        fb = fz * (f0 + fx * px[0, i1] + fy * py[0, i1])
+        # The ends' parameters along the triangle's edge a -> b
+        dx = tri[b, 0] - tri[a, 0]
+        dy = tri[b, 1] - tri[a, 1]
+        ll = dx * dx + dy * dy
+        if not ll > 0.0:
+            continue
+        sa = min(max(((px[0, i] - tri[a, 0]) * dx + (py[0, i] - tri[a, 1]) * dy) / ll, 0.0), 1.0)
+        sb = min(max(((px[0, i1] - tri[a, 0]) * dx + (py[0, i1] - tri[a, 1]) * dy) / ll, 0.0),
+                 1.0)
+        # int f N ds / length for the hats of a (1 - s) and b (s)
+        ra = 1.0 - sa
+        rb = 1.0 - sb
+        ca = fa * ra / 3.0 + (fa * rb + fb * ra) / 6.0 + fb * rb / 3.0
+        cb = fa * sa / 3.0 + (fa * sb + fb * sa) / 6.0 + fb * sb / 3.0
+        # Triangle vertex 0 is corner k, 1 corner k + 1, 2 the centroid (the corners' mean)
+        for v, cv in ((a, ca), (b, cb)):
+            if v == 2:
+                for m in range(4):
+                    g[rq + m, 0] += 0.25 * cv * ex
+                    g[rq + m, 1] += 0.25 * cv * ey
+            else:
+                r = rq + (k if v == 0 else k1)
+                g[r, 0] += cv * ex
+                g[r, 1] += cv * ey
+
+
+@njit(cache=True)
 def side_potential(xs, xq, hq, px, py, pt, tri, g, rs, rq):
     """int over S cap Q of psi_Q (S = xs, Q = xq, both (4, 2) CCW; psi_Q's peak hq), its
     gradient added to g: S's nodes in rows rs..rs+3, Q's in rows rq..rq+3. px, py, pt: clip
     buffers (slots 0 and 1 are used); tri (3, 2) scratch. Returns the integral (>= 0)."""
     w = 0.0
+    folded = folded_triangles(xq, tri)
     for k in range(4):
         d2 = element_triangle(xq, k, tri)
         if not d2 > 0.0:
@@ -163,8 +244,11 @@ def side_potential(xs, xq, hq, px, py, pt, tri, g, rs, rq):
         # psi_T = hq lambda_c, linear: lambda_c = (e_x (y - y0) - e_y (x - x0)) / d2
         ex = tri[1, 0] - tri[0, 0]
         ey = tri[1, 1] - tri[0, 1]
-        sweep_gradient(xs, px, py, pt, n, -ey / d2, ex / d2,
-                       (ey * tri[0, 0] - ex * tri[0, 1]) / d2, hq, g, rs)
+        fx, fy, f0 = -ey / d2, ex / d2, (ey * tri[0, 0] - ex * tri[0, 1]) / d2
+        sweep_gradient(xs, px, py, pt, n, fx, fy, f0, hq, g, rs)
+        # The inner edges whose neighbour holds no potential (clip lines 1 and 2 of tri)
+        if folded & neighbour_bits(k):
+            inner_edge_gradient(tri, k, folded, px, py, pt, n, fx, fy, f0, hq, g, rq)
     return w
 
 
@@ -189,6 +273,7 @@ def wall_potential(xa, ha, p0x, p0y, nx, ny, px, py, pt, tri, g):
     w = 0.0
     # A's own potential behind the wall: each triangle clipped by the wall's line (field only:
     # the polygons' edges lie on the wall, on A's boundary where psi = 0, or inside A)
+    folded = folded_triangles(xa, tri)
     for k in range(4):
         d2 = element_triangle(xa, k, tri)
         if not d2 > 0.0:
@@ -201,6 +286,14 @@ def wall_potential(xa, ha, p0x, p0y, nx, ny, px, py, pt, tri, g):
         if not area > 0.0:
             continue
         w += area * ha * field_gradient(tri, d2, k, ha, area, cx, cy, g, ROW_A)
+        # The inner edges whose neighbour holds no potential: here the polygon's edges keep
+        # the subject's tags (the triangle's edge i), not clip-line tags
+        if folded & neighbour_bits(k):
+            ex = tri[1, 0] - tri[0, 0]
+            ey = tri[1, 1] - tri[0, 1]
+            retag_subject_edges(pt, n)
+            inner_edge_gradient(tri, k, folded, px, py, pt, n, -ey / d2, ex / d2,
+                                (ey * tri[0, 0] - ex * tri[0, 1]) / d2, ha, g, ROW_A)
     # The wall's depth over the part of A behind it (A's edges sweep it)
     load_subject(xa, 4, px, py, pt, 1)
     n = clip_halfplane(px, py, pt, 1, 4, p0x, p0y, nx, ny, 0, 0)
@@ -222,3 +315,21 @@ def corner_extent(xq, tx, ty):
         lo = min(lo, f)
         hi = max(hi, f)
     return hi - lo
+
+
+@njit(cache=True)
+def corner_box(xq, tx, ty):
+    """Box of the corners of xq (4, 2), (x_lo, x_hi, y_lo, y_hi), and their extent along
+    (tx, ty)."""
+    lx = hx = xq[0, 0]
+    ly = hy = xq[0, 1]
+    lo = hi = xq[0, 0] * tx + xq[0, 1] * ty
+    for k in range(1, 4):
+        lx = min(lx, xq[k, 0])
+        hx = max(hx, xq[k, 0])
+        ly = min(ly, xq[k, 1])
+        hy = max(hy, xq[k, 1])
+        f = xq[k, 0] * tx + xq[k, 1] * ty
+        lo = min(lo, f)
+        hi = max(hi, f)
+    return lx, hx, ly, hy, hi - lo

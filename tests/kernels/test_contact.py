@@ -659,3 +659,27 @@ def test_compact_rows_and_history_merge_equal_the_dense_rows():
     for a, b in zip(dense, comp, strict=True):
         assert a[touch].tobytes() == b[:n].tobytes()
     assert np.array_equal(comp[1][:n], keys[touch])
+
+
+def test_frame_of_a_collapsed_element_stays_within_both_elements():
+    # A (nodes 2 and 3 within 2 micrometres) and a B with a reflex corner, from a 1-point run
+    # at 1500 m/s: the clip's tiny area over its first moment put the contact point 3 mm away
+    # and the width at 3.2 mm (the stable step then fell fourfold every step)
+    xa = np.array([[0.000805691, 0.001533301], [0.000771046, 0.001518305],
+                   [0.000736386, 0.001455121], [0.00073583, 0.001456865]])
+    xb = np.array([[0.000798645, 0.001594663], [0.000760464, 0.001525847],
+                   [0.000718687, 0.0014057], [0.000754461, 0.001494913]])
+    x, conn, ebnd, egid, eloc, elen = two_elements(xa, xb, elen=2.0166e-5)
+    lo = np.maximum(xa.min(0), xb.min(0))
+    hi = np.minimum(xa.max(0), xb.max(0))
+    for law in (L.LAW_AREA, L.LAW_POTENTIAL):
+        _, out = run_pairs(x, np.zeros_like(x), conn, ebnd, egid, eloc, elen,
+                           np.array([[0, 1]], np.int64), law_params(1, kn0=1e16, dmax=3e-5,
+                                                                    law=law), np.zeros(1))
+        act, res = out[0], out[5]
+        assert act[0] == C.C_ACTIVE
+        t = np.array([-res[0, C.R_NY], res[0, C.R_NX]])
+        extent = min(np.ptp(xa @ t), np.ptp(xb @ t))
+        assert 0.0 < res[0, C.R_WIDTH] <= extent
+        c = res[0, [C.R_CX, C.R_CY]]
+        assert np.all(c >= lo) and np.all(c <= hi)

@@ -68,6 +68,55 @@ def test_pair_gradient_nonconvex_host():
     assert np.abs(fd - g).max() <= 1e-6 * np.abs(g).max()
 
 
+# A host whose reflex corner (node 1) lies beyond its centroid, so that its triangle 1 holds no
+# potential: the shape of an element of the 1-point rule at 1500 m/s (scaled from micrometres)
+FOLDED = np.array([[653.0, 1880.0], [713.0, 1826.0], [725.0, 1784.0], [724.0, 1871.0]])
+TOUCHING = np.array([[685.0, 1787.0], [711.0, 1766.0], [720.0, 1778.0], [722.0, 1816.0]])
+
+
+def test_folded_host_triangle_holds_nothing_and_gradient_stays_exact():
+    tri = np.empty((3, 2))
+    assert P.folded_triangles(FOLDED, tri) == 0b0010
+    x = np.vstack([TOUCHING, FOLDED]) * 1e-2
+    w, g = pair_w(x, 0.174, 0.213)
+    assert w > 0
+    fd = fd_gradient(lambda y: pair_w(y, 0.174, 0.213)[0], x, eps=1e-6)
+    # Without the inner edges' terms B's rows were off by 1.75 times the largest component
+    assert np.abs(fd - g).max() <= 1e-6 * np.abs(g).max()
+    assert np.abs(g.sum(0)).max() <= 1e-12 * np.abs(g).max()
+
+
+def test_folded_element_behind_wall_gradient_stays_exact():
+    xa = FOLDED * 1e-2
+    for y0 in (18.3, 18.6, 18.0):
+        w, g = wall_w(xa, 0.213, (0.0, y0), (0.0, 1.0))
+        assert w > 0
+        fd = fd_gradient(lambda y, y0=y0: wall_w(y, 0.213, (0.0, y0), (0.0, 1.0))[0], xa,
+                         eps=1e-6)
+        assert np.abs(fd - g[:4]).max() <= 1e-6 * np.abs(g[:4]).max()
+
+
+def test_random_hosts_with_folded_triangles():
+    # Quads with one corner pulled past the centroid, against random quads
+    rng = np.random.default_rng(21)
+    tri = np.empty((3, 2))
+    checked = 0
+    while checked < 30:
+        xb = random_quad(rng, spread=0.3)
+        k = rng.integers(4)
+        c = xb.mean(0)
+        xb[k] = c + rng.uniform(0.2, 1.2) * (c - xb[k]) * 0.5
+        if P.folded_triangles(xb, tri) == 0 or P.folded_triangles(xb, tri) == 15:
+            continue
+        x = np.vstack([random_quad(rng, spread=0.3) + rng.normal(0, 0.2, 2), xb])
+        w, g = pair_w(x, 0.4, 0.5)
+        if w <= 1e-4:
+            continue
+        fd = fd_gradient(lambda y: pair_w(y, 0.4, 0.5)[0], x)
+        assert np.abs(fd - g).max() <= 1e-6 * np.abs(g).max()
+        checked += 1
+
+
 def test_flat_contact_closed_form():
     # Two squares of side s over a whole edge by d: W = s d^2 - 2 d^3 / 3 (each square's
     # potential is its distance to the nearest edge)

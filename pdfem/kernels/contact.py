@@ -107,6 +107,7 @@ from pdfem.kernels.overlap import (
     T_KIND,
     T_SRC,
     alloc_clip_buffers,
+    bbox_scale2,
     halfplane_into,
 )
 
@@ -465,7 +466,9 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                                       qx, qy, qt, qtri, g)
             else:
                 wpot = pair_potential(xa, xb, 0.5 * elen[a], 0.5 * elen[b], qx, qy, qt, qtri, g)
-            if not wpot > 0.0 or not length > 0.0:
+            # A rounding-level equivalent area is no contact, as for the area law
+            if not wpot > 0.0 or not length > 0.0 or not (np.sqrt(wpot * length)
+                                                           > SLIVER * bbox_scale2(xa)):
                 st = OV_NONE
             else:
                 area = np.sqrt(wpot * length)
@@ -478,8 +481,9 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                     if k < 4:
                         gax += g[k, 0]
                         gay += g[k, 1]
-                if st == OV_INSIDE:
-                    # No chord: the normal is the gradient's for a translation of A, the width
+                if st == OV_INSIDE or (nx == 0.0 and ny == 0.0):
+                    # No chord, or none with a normal (the clip of elements that cross
+                    # themselves): the normal is the gradient's for a translation of A, the width
                     # the narrower element's extent along the tangent
                     nx, ny = unit_normal(gax, gay, gax, gay)
                     width = corner_extent(xa, -ny, nx)

@@ -260,3 +260,24 @@ def test_element_behind_wall_is_repelled():
     assert res[0, C.R_DELTA] == pytest.approx(delta, rel=1e-13)
     assert out[3][0, :4].sum(0) == pytest.approx([0.0, tn / (2 * delta)], rel=1e-12)
     assert res[0, C.R_NY] == pytest.approx(-1.0)
+
+
+def test_rounding_level_potential_is_no_contact():
+    # Two slivers along a wall, each crossing itself, from a 1-point run at 2000 m/s: W is
+    # 4e-46 m^3 with a zero gradient, which has no normal; like a rounding-level area under the
+    # area law it is no contact, not a guard
+    x = np.array([[2.5586358897955492e-05, 1.2077436720927353e-03],
+                  [7.7062524796725978e-06, 1.2319582590957295e-03],
+                  [-2.3030245597191520e-07, 1.5443847125299695e-03],
+                  [-4.3489920896447433e-07, 1.2183661758106477e-03],
+                  [1.4908176001314819e-04, 1.4645629909709780e-03],
+                  [1.7746642397814985e-06, 1.4862623718779455e-03],
+                  [4.1180737978543913e-06, 1.4465940065746736e-03],
+                  [1.2702795741570462e-04, 1.4790894768992864e-03]])
+    elen = np.array([3.7387045623255844e-05, 3.2725218946895976e-05])
+    w, g = pair_w(x, elen[0] / 2, elen[1] / 2)
+    assert 0.0 < w < 1e-40 and not np.any(g[:4].sum(0))
+    _, conn, _, egid, eloc, _ = two_elements(x[:4], x[4:])
+    ebnd = np.array([[0, 1, 1, 0], [0, 1, 0, 0]], np.int8)
+    act = energy_and_forces(x, conn, ebnd, egid, eloc, elen, L.LAW_POTENTIAL)[0]
+    assert act[0] == C.C_NONE

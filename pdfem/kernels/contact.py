@@ -466,12 +466,11 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                                       qx, qy, qt, qtri, g)
             else:
                 wpot = pair_potential(xa, xb, 0.5 * elen[a], 0.5 * elen[b], qx, qy, qt, qtri, g)
-            # A rounding-level equivalent area is no contact, as for the area law
-            if not wpot > 0.0 or not length > 0.0 or not (np.sqrt(wpot * length)
-                                                           > SLIVER * bbox_scale2(xa)):
+            # The equivalent area; a rounding-level one is no contact, as for the area law
+            area = np.sqrt(wpot * length) if wpot > 0.0 and length > 0.0 else 0.0
+            if not area > SLIVER * bbox_scale2(xa):
                 st = OV_NONE
             else:
-                area = np.sqrt(wpot * length)
                 sc = 0.5 / np.sqrt(wpot / length)
                 gax = 0.0
                 gay = 0.0

@@ -107,6 +107,31 @@ def field_gradient(tri, d2, k, h, area, cx, cy, g, rq):
 
 
 @njit(cache=True)
+def edge_hat_moments(xi, yi, xj, yj, fx, fy, f0, fz, ax, ay, bx, by):
+    """For the polygon edge (xi, yi) -> (xj, yj) lying on the element edge a -> b: its outward
+    normal x length (ex, ey) and int f N ds / length for the hats of a (1 - s) and b (s),
+    f = fz (f0 + fx x + fy y) linear along the edge. Returns (ok, ex, ey, ca, cb); ok is False
+    for a degenerate a -> b, which moves no polygon edge."""
+    ex = yj - yi
+    ey = xi - xj
+    fa = fz * (f0 + fx * xi + fy * yi)
+    fb = fz * (f0 + fx * xj + fy * yj)
+    # The ends' parameters along a -> b
+    dx = bx - ax
+    dy = by - ay
+    ll = dx * dx + dy * dy
+    if not ll > 0.0:
+        return False, ex, ey, 0.0, 0.0
+    sa = min(max(((xi - ax) * dx + (yi - ay) * dy) / ll, 0.0), 1.0)
+    sb = min(max(((xj - ax) * dx + (yj - ay) * dy) / ll, 0.0), 1.0)
+    ra = 1.0 - sa
+    rb = 1.0 - sb
+    ca = fa * ra / 3.0 + (fa * rb + fb * ra) / 6.0 + fb * rb / 3.0
+    cb = fa * sa / 3.0 + (fa * sb + fb * sa) / 6.0 + fb * sb / 3.0
+    return True, ex, ey, ca, cb
+
+
+@njit(cache=True)
 def sweep_gradient(xs, px, py, pt, n, fx, fy, f0, fz, g, rs):
     """Add to g rows rs..rs+3 the derivative of int f over the polygon in slot 0 (n vertices)
     with respect to the nodes of the subject xs whose edges its T_SRC >= 0 edges lie on; f is
@@ -118,26 +143,14 @@ def sweep_gradient(xs, px, py, pt, n, fx, fy, f0, fz, g, rs):
         if src < 0:
             continue
         i1 = i + 1 if i + 1 < n else 0
-        # Outward normal x length of the polygon edge, and the field at its ends
-        ex = py[0, i1] - py[0, i]
-        ey = px[0, i] - px[0, i1]
-        fa = fz * (f0 + fx * px[0, i] + fy * py[0, i])
-        fb = fz * (f0 + fx * px[0, i1] + fy * py[0, i1])
-        # The ends' parameters along the subject's edge src -> src + 1
+        # The polygon edge on the subject's edge src -> src + 1
         j = src
         j1 = j + 1 if j + 1 < 4 else 0
-        dx = xs[j1, 0] - xs[j, 0]
-        dy = xs[j1, 1] - xs[j, 1]
-        ll = dx * dx + dy * dy
-        if not ll > 0.0:
+        ok, ex, ey, cj, cj1 = edge_hat_moments(px[0, i], py[0, i], px[0, i1], py[0, i1], fx,
+                                               fy, f0, fz, xs[j, 0], xs[j, 1], xs[j1, 0],
+                                               xs[j1, 1])
+        if not ok:
             continue
-        sa = min(max(((px[0, i] - xs[j, 0]) * dx + (py[0, i] - xs[j, 1]) * dy) / ll, 0.0), 1.0)
-        sb = min(max(((px[0, i1] - xs[j, 0]) * dx + (py[0, i1] - xs[j, 1]) * dy) / ll, 0.0), 1.0)
-        # int f N ds / length for the two hats N_j = 1 - s and N_j1 = s (both ends linear)
-        ra = 1.0 - sa
-        rb = 1.0 - sb
-        cj = fa * ra / 3.0 + (fa * rb + fb * ra) / 6.0 + fb * rb / 3.0
-        cj1 = fa * sa / 3.0 + (fa * sb + fb * sa) / 6.0 + fb * sb / 3.0
         g[rs + j, 0] += cj * ex
         g[rs + j, 1] += cj * ey
         g[rs + j1, 0] += cj1 * ex
@@ -191,25 +204,11 @@ def inner_edge_gradient(tri, k, folded, px, py, pt, n, fx, fy, f0, fz, g, rq):
         else:
             continue
         i1 = i + 1 if i + 1 < n else 0
-        # Outward normal x length of the polygon edge, and the field at its ends
-        ex = py[0, i1] - py[0, i]
-        ey = px[0, i] - px[0, i1]
-        fa = fz * (f0 + fx * px[0, i] + fy * py[0, i])
-        fb = fz * (f0 + fx * px[0, i1] + fy * py[0, i1])
-        # The ends' parameters along the triangle's edge a -> b
-        dx = tri[b, 0] - tri[a, 0]
-        dy = tri[b, 1] - tri[a, 1]
-        ll = dx * dx + dy * dy
-        if not ll > 0.0:
+        # The polygon edge on the triangle's edge a -> b
+        ok, ex, ey, ca, cb = edge_hat_moments(px[0, i], py[0, i], px[0, i1], py[0, i1], fx, fy,
+                                              f0, fz, tri[a, 0], tri[a, 1], tri[b, 0], tri[b, 1])
+        if not ok:
             continue
-        sa = min(max(((px[0, i] - tri[a, 0]) * dx + (py[0, i] - tri[a, 1]) * dy) / ll, 0.0), 1.0)
-        sb = min(max(((px[0, i1] - tri[a, 0]) * dx + (py[0, i1] - tri[a, 1]) * dy) / ll, 0.0),
-                 1.0)
-        # int f N ds / length for the hats of a (1 - s) and b (s)
-        ra = 1.0 - sa
-        rb = 1.0 - sb
-        ca = fa * ra / 3.0 + (fa * rb + fb * ra) / 6.0 + fb * rb / 3.0
-        cb = fa * sa / 3.0 + (fa * sb + fb * sa) / 6.0 + fb * sb / 3.0
         # Triangle vertex 0 is corner k, 1 corner k + 1, 2 the centroid (the corners' mean)
         for v, cv in ((a, ca), (b, cb)):
             if v == 2:

@@ -77,7 +77,7 @@ def _batch(fields, nip, nst, gid, nn, ne, isglobal, x, v, lconn, emat, ebnd):
         "emat": emat.astype(np.int32), "ebnd": ebnd.astype(np.int8),
         "elen": contact_lengths(x, lconn + first[:, None], ebnd),
         "sig": np.zeros((nelem, nip, 4)), "mst": np.zeros((nelem, nip, nst)),
-        "hgq": np.zeros((nelem, 2)), "ewint": np.zeros(nelem), "ewp": np.zeros(nelem),
+        "ewint": np.zeros(nelem), "ewp": np.zeros(nelem),
         "hkey": np.zeros((0, 4), np.int64), "hval": np.zeros(0),
     }
     for f in fields:

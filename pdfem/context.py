@@ -35,8 +35,6 @@ class Context:
             sim.nip
         self.effects, self.effect_names, self.terms = sim.effects, sim.effect_names, sim.terms
         self.has_contact = sim.has_contact
-        # The hourglass coefficient of the 1-point rule (0 for 2x2)
-        self.hg_coef = sim.hg_coef
 
     @property
     def reach(self):

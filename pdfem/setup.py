@@ -14,6 +14,7 @@ import numpy as np
 from partition import partition
 from pdfem import build
 from pdfem.errors import InputError
+from pdfem.kernels.element_1pt import hourglass_reference
 from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.material import material_initial_state
 from pdfem.parallel.exchange import owned_grain_cells
@@ -68,6 +69,10 @@ def initial_bodies(sim, scene, init_state):
     q4_lumped_mass(store.x, store.conn, store.emat, sim.mat_params, 0, store.ne_own, store.m)
     if init_state is not None:
         init_state(sim, store)
+    # The 1-point rule's hourglass modes are measured from this configuration
+    if sim.nip == 1:
+        hourglass_reference(store.x, store.conn, store.emat, sim.mat_params, sim.hg_coef, 0,
+                            store.ne_own, store.hgref)
     return store, owner, blocks
 
 

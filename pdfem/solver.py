@@ -281,7 +281,7 @@ class Simulation:
             eff.before_elements(st, self.ctx)
         with self.timers.phase("elements"):
             bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
-                                      s.mst, s.hgq, self.hg_coef, 0, s.ne_own, self.f, s.ewint,
+                                      s.mst, s.hourglass, 0, s.ne_own, self.f, s.ewint,
                                       s.ewp, s.eth if self.coupled else self.no_eth)
         if bad >= 0:
             self.fail(self._element_failure(bad))

@@ -14,6 +14,8 @@ import numpy as np
 
 # Field kinds: one row per body, per node, per element or per contact-history entry
 BODY, NODE, ELEM, PAIR = "body", "node", "elem", "pair"
+# The hourglass reference of a run without one (2x2 rule): no element has hourglass control
+NO_HOURGLASS = np.zeros((0, 5))
 
 
 @dataclass(frozen=True)
@@ -27,7 +29,9 @@ class Field:
 
 
 def core_fields(nip, nst, nacc):
-    """The fields every run has; effects add their own (temperature, ...)."""
+    """The fields every run has, and the 1-point rule's hourglass reference (hgref:
+    pdfem.kernels.element_1pt); effects add their own (temperature, ...)."""
+    hourglass = [Field("hgref", ELEM, (5,), np.float64)] if nip == 1 else []
     return [
         Field("gid", BODY, (), np.int64),
         Field("nn", BODY, (), np.int64),
@@ -45,7 +49,7 @@ def core_fields(nip, nst, nacc):
         Field("elen", ELEM, (), np.float64),
         Field("sig", ELEM, (nip, 4), np.float64),
         Field("mst", ELEM, (nip, nst), np.float64),
-        Field("hgq", ELEM, (2,), np.float64),
+    ] + hourglass + [
         Field("ewint", ELEM, (), np.float64),
         Field("ewp", ELEM, (), np.float64),
         Field("hkey", PAIR, (4,), np.int64),
@@ -142,6 +146,9 @@ class Store:
         self.elem_gid = self.gid[self.elem_body]
         self.elem_loc = np.arange(self.nelem, dtype=np.int64) - self.estart[self.elem_body]
         self.xref = self.x.copy()
+        # The element kernels' hourglass reference: hgref for the 1-point rule, else none
+        self.hourglass = next((self.hgref for f in self.fields if f.name == "hgref"),
+                              NO_HOURGLASS)
 
     @property
     def nbody(self):

@@ -22,12 +22,11 @@ from numba import njit
 
 from pdfem.kernels.eos import eos_row
 from pdfem.kernels.material import material_update, softened
-from pdfem.kernels.params import ALPHA, BULK, EOS_S, SHEAR, SOFT_K, SOFT_Y
+from pdfem.kernels.params import ALPHA, EOS_S, SOFT_K, SOFT_Y
 
 GP = 0.5773502691896257  # 1/sqrt(3), 2x2 Gauss abscissa
 XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
 ETA = np.array([-1.0, -1.0, 1.0, 1.0])
-HG = np.array([1.0, -1.0, 1.0, -1.0])  # hourglass base vector h
 
 
 @njit(cache=True)
@@ -162,15 +161,6 @@ def thermal_row(p, eth, e, has_th, pbuf):
 
 
 @njit(cache=True)
-def _hg_stiffness(p, a, bx, by):
-    """Hourglass stiffness k = (K + 4G/3) (B.B) / A per unit hg_coef (B = A b)."""
-    bb = 0.0
-    for i in range(4):
-        bb += bx[i] * bx[i] + by[i] * by[i]
-    return (p[BULK] + 4.0 * p[SHEAR] / 3.0) * a * bb
-
-
-@njit(cache=True)
 def _scatter(conn, e, fe, f):
     """f -= fe for the 4 nodes of element e, in node order."""
     for i in range(4):
@@ -180,9 +170,9 @@ def _scatter(conn, e, fe, f):
 
 
 @njit(cache=True)
-def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
+def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1,
                   f, ewint, ewp, eth):
-    """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hgq and hg_coef are ignored.
+    """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hg is ignored.
 
     Updates sig (ne,4,4) and mstate per point; subtracts internal forces from f element by
     element; adds stress work to ewint and plastic work to ewp (weights x current det J).

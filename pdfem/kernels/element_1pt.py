@@ -3,14 +3,20 @@
 The objective update of pdfem.kernels.element (mid-step gradient, Cayley rotation, material
 update, forces at the current configuration) at the element centre, with the mean (=
 centroid) gradient b_I = dN_I/dx, b_x = (y24, y31, y42, y13)/(2A), b_y = (x42, x13, x24,
-x31)/(2A), plus Flanagan-Belytschko (1981) stiffness hourglass control, h = (1, -1, 1, -1):
-    gamma_I = (h_I - (h.x) b_xI - (h.y) b_yI) / 4        (gamma.h = 1, gamma . linear = 0)
-    dq_a    = sum_I gamma_I du_Ia                         (gamma at x_mid)
-    k       = hg_coef (K + 4G/3) (B.B) / A,  B_iI = int dN_I/dx_i dA = A b_iI
-    Q_a    <- Q_ab Q_b + k dq_a   (rotated with the element spin, then incremented; Q = hgq[e])
-    f_Ia   = Q_a gamma_I          (gamma at x; internal force, subtracted from f)
-The hourglass work 0.5 (Q_rotated + Q_new).dq joins ewint; its stored energy is 0.5 Q.Q / k.
-hgq of shape (0, 2) switches hourglass control off.
+x31)/(2A), plus total-form stiffness hourglass control: the Flanagan-Belytschko (1981) hourglass
+vector of h = (1, -1, 1, -1), taken once in the configuration the run starts from,
+    gamma_I = (h_I - (h.X) b_xI - (h.Y) b_yI) / 4     (gamma.h = 1, gamma . linear = 0)
+measures the hourglass mode of the current positions, q_a = sum_I gamma_I x_Ia (zero for
+every affine map of the starting element, rigid motion included; summed over the corners'
+positions relative to corner 0, with gamma_0 = -(gamma_1 + gamma_2 + gamma_3) so that the
+forces add up to zero and q does not lose digits to the grain's distance from the origin),
+and the mode's energy
+    E = k (q.q) / 2,   k = hg_coef (K + 4G/3) (B.B) / A at the start,  B_iI = A b_iI
+gives the nodal forces f_Ia = k q_a gamma_I (internal, subtracted from f). The force is the
+gradient of E, so it does no work beyond E's change whatever the strain or rotation, and its
+work, the change of E over the step (exact for a quadratic energy: the trapezoid of the
+forces), joins ewint. hg[e] = (gamma_0..3, k), from :func:`hourglass_reference`; hg of shape
+(0, 5) switches hourglass control off.
 
 One kernel for every material and thermal coupling: every quantity of an element lives in
 scalar locals (no scratch arrays), which lets LLVM keep them in registers. A cap point takes
@@ -57,11 +63,11 @@ def _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1, by2, by
 
 
 @njit(cache=True)
-def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1, f, ewint,
-                  ewp, eth):
-    """One-point quads with FB stiffness hourglass control on elements [e0, e1).
+def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, e0, e1, f, ewint, ewp, eth):
+    """One-point quads with total-form hourglass control (hg, module docstring) on elements
+    [e0, e1).
 
-    Updates sig (ne,1,4), mst (ne,1,nst) and hgq (ne,2) in place, subtracts the internal
+    Updates sig (ne,1,4) and mst (ne,1,nst) in place, subtracts the internal
     forces from f (nn,2) element by element, adds stress and hourglass work to ewint and
     plastic work to ewp. eth (ne, 3) couples temperature in (element.thermal_row; the
     thermal-strain work goes to eth[:, 2]); shape (0, 3) or None leaves it out, None in a
@@ -71,7 +77,7 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1,
     """
     if sig.shape[1] != 1:
         raise ValueError("q4_forces_1pt needs sig of shape (ne, 1, 4)")
-    has_hg = hgq.shape[0] > 0
+    has_hg = hg.shape[0] > 0
     pbuf = np.empty(mat_params.shape[1])
     ebuf = np.empty(mat_params.shape[1])
     for e in range(e0, e1):
@@ -152,14 +158,6 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1,
             return e
         wk = 0.5 * ((r0 + t0) * d0 + (r1 + t1) * d1 + 2.0 * (r2 + t2) * d2 + (r3 + t3) * d3)
         wth = 0.5 * dth * (r0 + t0 + r1 + t1 + r3 + t3)
-        # Hourglass displacement increment at mid-step
-        dq0 = 0.0
-        dq1 = 0.0
-        if has_hg:
-            g0, g1, g2, g3 = _gamma(m0, l0, m1, l1, m2, l2, m3, l3, bx0, bx1, bx2, bx3,
-                                    by0, by1, by2, by3)
-            dq0 = g0 * u0 + g1 * u1 + g2 * u2 + g3 * u3
-            dq1 = g0 * v0 + g1 * v1 + g2 * v2 + g3 * v3
         # Current geometry: area and gradients for the forces
         a, bx0, bx1, bx2, bx3, by0, by1, by2, by3 = _mean_gradient(x0, y0, x1, y1, x2, y2,
                                                                    x3, y3)
@@ -175,22 +173,15 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1,
         fx1, fy1 = a * (t0 * bx1 + t2 * by1), a * (t2 * bx1 + t1 * by1)
         fx2, fy2 = a * (t0 * bx2 + t2 * by2), a * (t2 * bx2 + t1 * by2)
         fx3, fy3 = a * (t0 * bx3 + t2 * by3), a * (t2 * bx3 + t1 * by3)
-        # Rotate and increment the hourglass forces, add their work and nodal forces
+        # Hourglass: the mode q of the current positions, its energy's change, its forces
         if has_hg:
-            bb = bx0 * bx0 + by0 * by0
-            bb += bx1 * bx1 + by1 * by1
-            bb += bx2 * bx2 + by2 * by2
-            bb += bx3 * bx3 + by3 * by3
-            k = hg_coef * ((p[BULK] + 4.0 * p[SHEAR] / 3.0) * a * bb)
-            q0 = c * hgq[e, 0] + sn * hgq[e, 1]
-            q1 = c * hgq[e, 1] - sn * hgq[e, 0]
-            h0 = q0 + k * dq0
-            h1 = q1 + k * dq1
-            hgq[e, 0] = h0
-            hgq[e, 1] = h1
-            ewint[e] += 0.5 * ((q0 + h0) * dq0 + (q1 + h1) * dq1)
-            g0, g1, g2, g3 = _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3,
-                                    by0, by1, by2, by3)
+            g0, g1, g2, g3, k = hg[e, 0], hg[e, 1], hg[e, 2], hg[e, 3], hg[e, 4]
+            q0 = g1 * (x1 - x0) + g2 * (x2 - x0) + g3 * (x3 - x0)
+            q1 = g1 * (y1 - y0) + g2 * (y2 - y0) + g3 * (y3 - y0)
+            p0 = q0 - (g1 * (u1 - u0) + g2 * (u2 - u0) + g3 * (u3 - u0))
+            p1 = q1 - (g1 * (v1 - v0) + g2 * (v2 - v0) + g3 * (v3 - v0))
+            ewint[e] += 0.5 * k * ((q0 * q0 + q1 * q1) - (p0 * p0 + p1 * p1))
+            h0, h1 = k * q0, k * q1
             fx0, fy0 = fx0 + h0 * g0, fy0 + h1 * g0
             fx1, fy1 = fx1 + h0 * g1, fy1 + h1 * g1
             fx2, fy2 = fx2 + h0 * g2, fy2 + h1 * g2
@@ -205,3 +196,24 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hgq, hg_coef, e0, e1,
         f[n3, 0] -= fx3
         f[n3, 1] -= fy3
     return -1
+
+
+@njit(cache=True)
+def hourglass_reference(x, conn, emat, mat_params, hg_coef, e0, e1, hg):
+    """hg[e] = (gamma_0..3, k) of elements [e0, e1) in the configuration x (module
+    docstring): the hourglass vector orthogonal to every linear field of that configuration
+    and the stiffness hg_coef (K + 4G/3) A (b.b) of the element's material row (zero for an
+    element whose area is not positive, which the first force evaluation stops on)."""
+    for e in range(e0, e1):
+        p = mat_params[emat[e]]
+        n0, n1, n2, n3 = conn[e, 0], conn[e, 1], conn[e, 2], conn[e, 3]
+        x0, y0, x1, y1 = x[n0, 0], x[n0, 1], x[n1, 0], x[n1, 1]
+        x2, y2, x3, y3 = x[n2, 0], x[n2, 1], x[n3, 0], x[n3, 1]
+        a, bx0, bx1, bx2, bx3, by0, by1, by2, by3 = _mean_gradient(x0, y0, x1, y1, x2, y2,
+                                                                   x3, y3)
+        _, g1, g2, g3 = _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1,
+                               by2, by3)
+        hg[e, 0], hg[e, 1], hg[e, 2], hg[e, 3] = -(g1 + g2 + g3), g1, g2, g3
+        bb = (bx0 * bx0 + by0 * by0 + bx1 * bx1 + by1 * by1 + bx2 * bx2 + by2 * by2
+              + bx3 * bx3 + by3 * by3)
+        hg[e, 4] = hg_coef * ((p[BULK] + 4.0 * p[SHEAR] / 3.0) * max(a, 0.0) * bb)

@@ -8,7 +8,7 @@ import numpy as np
 from numba import njit
 
 from pdfem.kernels.elastic import elastic_energy_density
-from pdfem.kernels.element import ETA, GP, XI, _bvec, _hg_stiffness, _ip_grad
+from pdfem.kernels.element import ETA, GP, XI, _bvec, _ip_grad
 from pdfem.kernels.params import RHO
 
 
@@ -37,11 +37,12 @@ def q4_lumped_mass(x, conn, emat, mat_params, e0, e1, m):
 
 
 @njit(cache=True)
-def q4_strain_energy(x, conn, emat, mat_params, sig, hgq, hg_coef, e0, e1, out):
+def q4_strain_energy(x, conn, emat, mat_params, sig, hg, e0, e1, out):
     """out[e] = stored elastic energy of element e in [e0, e1) [J/m].
 
     Sum over points of elastic_energy_density(sig) x point volume (current configuration);
-    for the 1-point rule with hgq.shape[0] > 0 and hg_coef > 0 also 0.5 Q.Q / k. A
+    for the 1-point rule with hg.shape[0] > 0 also the hourglass energy k (q.q) / 2 of
+    pdfem.kernels.element_1pt. A
     non-positive area / Jacobian contributes its (non-positive) volume as is.
     """
     nip = sig.shape[1]
@@ -58,9 +59,12 @@ def q4_strain_energy(x, conn, emat, mat_params, sig, hgq, hg_coef, e0, e1, out):
             # Centroid rule plus the hourglass spring energy
             a = _bvec(xc, dx, dy)
             en = elastic_energy_density(p, sig[e, 0]) * a
-            if hgq.shape[0] > 0 and hg_coef > 0.0 and a > 0.0:
-                k = hg_coef * _hg_stiffness(p, a, dx, dy)
-                en += 0.5 * (hgq[e, 0] * hgq[e, 0] + hgq[e, 1] * hgq[e, 1]) / k
+            if hg.shape[0] > 0:
+                q0, q1 = 0.0, 0.0
+                for i in range(1, 4):
+                    q0 += hg[e, i] * (xc[i, 0] - xc[0, 0])
+                    q1 += hg[e, i] * (xc[i, 1] - xc[0, 1])
+                en += 0.5 * hg[e, 4] * (q0 * q0 + q1 * q1)
         else:
             # 2x2 Gauss points
             for ip in range(4):

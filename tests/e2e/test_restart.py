@@ -528,3 +528,40 @@ def test_restart_refuses_a_damaged_segment(tmp_path):
     p = pdfem(["run", scene, "--restart", "k.h5.ckpt.h5", "-o", "k.h5"], tmp_path)
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and "k.h5.part.1" in p.stderr, p.stderr
+
+
+def _as_earlier_version(path):
+    """Rewrite a checkpoint as versions before the total-form hourglass control wrote it: an
+    element field hgq (ne, 2) after mst, and no hgref."""
+    with h5py.File(path, "r+") as f:
+        names = json.loads(f.attrs["fields"])
+        ne = f["elems/mst"].shape[0]
+        if "hgref" in names:
+            del f["elems/hgref"]
+            names.remove("hgref")
+        f["elems/hgq"] = np.zeros((ne, 2))
+        names.insert(names.index("mst") + 1, "hgq")
+        f.attrs["fields"] = json.dumps(names)
+
+
+def test_a_checkpoint_of_an_earlier_version_restarts_or_is_refused(tmp_path):
+    """A 2x2 run's checkpoint that holds the unused hgq field restarts as if it had none; a
+    1-point run's, whose hourglass forces were incremental, is refused in one line."""
+    for rule in ("2x2", "1pt"):
+        doc = _bed_doc(400, 2.0e-6)
+        doc["element"]["rule"] = rule
+        write_scene(tmp_path / f"{rule}.toml", doc)
+        p = pdfem(["run", f"{rule}.toml", "-o", f"{rule}.h5", "--quiet"], tmp_path)
+        assert p.returncode == 0, p.stderr
+    p = pdfem(["run", "2x2.toml", "--restart", "2x2.h5.ckpt.h5", "-o", "now.h5", "--quiet"],
+              tmp_path)
+    assert p.returncode == 0, p.stderr
+    _as_earlier_version(tmp_path / "2x2.h5.ckpt.h5")
+    p = pdfem(["run", "2x2.toml", "--restart", "2x2.h5.ckpt.h5", "-o", "old.h5", "--quiet"],
+              tmp_path)
+    assert p.returncode == 0, p.stderr
+    _same(tmp_path / "now.h5", tmp_path / "old.h5")
+    _as_earlier_version(tmp_path / "1pt.h5.ckpt.h5")
+    p = pdfem(["run", "1pt.toml", "--restart", "1pt.h5.ckpt.h5", "-o", "o.h5"], tmp_path)
+    assert p.returncode == 2 and "1-point hourglass forces of an earlier version" in p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1, p.stderr

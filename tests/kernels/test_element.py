@@ -5,11 +5,12 @@ import pytest
 
 from pdfem.kernels.elastic import elastic_energy_density, elastic_update
 from pdfem.kernels.element import q4_forces_2x2
-from pdfem.kernels.element_1pt import q4_forces_1pt
+from pdfem.kernels.element_1pt import hourglass_reference, q4_forces_1pt
 from pdfem.kernels.element_measures import q4_lumped_mass, q4_strain_energy
 from pdfem.kernels.params import BULK, CAP, ELASTIC, MODEL, NPAR, RHO, SHEAR
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.mesh.quality import jacobian_ratio
+from pdfem.tools.bench.numpy_element import hourglass_reference as numpy_hourglass_reference
 from pdfem.tools.bench.numpy_element import numpy_forces_1pt, numpy_forces_2x2
 
 K = 1.0e10
@@ -42,13 +43,22 @@ def grid(nx, ny, jitter, seed, offset=(0.0, 0.0)):
     return x, conn
 
 
-class State:
-    """Per-element arrays of one run."""
+def reference(xref, conn, mat=None):
+    """The 1-point rule's hourglass reference of the configuration xref (pdfem.kernels)."""
+    hg = np.zeros((conn.shape[0], 5))
+    hourglass_reference(xref, conn, np.zeros(conn.shape[0], np.int32),
+                        material() if mat is None else mat, HGC, 0, conn.shape[0], hg)
+    return hg
 
-    def __init__(self, nn, ne, nip):
+
+class State:
+    """Per-element arrays of one run; the 1-point rule's hourglass reference is xref's (no
+    hourglass control without it)."""
+
+    def __init__(self, nn, ne, nip, xref=None, conn=None):
         self.sig = np.zeros((ne, nip, 4))
         self.mstate = np.zeros((ne, nip, 0))
-        self.hgq = np.zeros((ne, 2))
+        self.hg = reference(xref, conn) if nip == 1 and xref is not None else np.zeros((0, 5))
         self.f = np.zeros((nn, 2))
         self.ewint = np.zeros(ne)
         self.ewp = np.zeros(ne)
@@ -58,8 +68,8 @@ class State:
         e1 = conn.shape[0] if e1 is None else e1
         self.f[:] = 0.0
         emat = np.zeros(conn.shape[0], dtype=np.int32)
-        return fn(x, du, conn, emat, mat, self.sig, self.mstate, self.hgq, HGC, e0, e1,
-                  self.f, self.ewint, self.ewp, np.zeros((0, 3)))
+        return fn(x, du, conn, emat, mat, self.sig, self.mstate, self.hg, e0, e1, self.f,
+                  self.ewint, self.ewp, np.zeros((0, 3)))
 
 
 def c_apply(deps):
@@ -78,7 +88,7 @@ def test_patch_linear_increment(rule):
     h = np.array([[1.0e-3, 2.0e-3], [-1.5e-3, -0.5e-3]])
     du = xref @ h.T + np.array([3e-4, -2e-4])
     x = xref + du
-    st = State(x.shape[0], conn.shape[0], nip)
+    st = State(x.shape[0], conn.shape[0], nip, xref, conn)
     sig0 = np.array([1.0e6, -2.0e6, 5.0e5, 3.0e5])
     st.sig[:] = sig0
     assert st.step(fn, x, du, conn, material()) == -1
@@ -92,11 +102,11 @@ def test_patch_linear_increment(rule):
         np.array([d[0, 0], d[1, 1], d[0, 1], 0.0]))
     scale = np.max(np.abs(expect))
     assert np.max(np.abs(st.sig - expect)) <= 1e-12 * scale
-    # Interior nodes (5, 6, 9, 10 of the 4 x 4 grid) carry no net force
+    # Interior nodes (5, 6, 9, 10 of the 4 x 4 grid) carry no net force (a linear field has no
+    # hourglass mode)
     interior = [5, 6, 9, 10]
     fscale = np.max(np.abs(st.f))
     assert np.max(np.abs(st.f[interior])) <= 1e-12 * fscale
-    assert np.max(np.abs(st.hgq)) <= 1e-12 * fscale
 
 
 def grain6():
@@ -114,11 +124,12 @@ def rotate(xref, centre, theta):
 
 @pytest.mark.parametrize("rule", ["1pt", "2x2"])
 def test_rigid_spin_stress_free(rule):
-    """360 degrees in 3600 prescribed steps: |stress| < 1e-9 * E * 1e-3 (strain scale 1e-3)."""
+    """360 degrees in 3600 prescribed steps: |stress| < 1e-9 * E * 1e-3 (strain scale 1e-3);
+    no hourglass force and no work at any step."""
     fn, _, nip = RULES[rule]
     xref, conn = grain6()
     centre = np.array([5.0, 3.0])
-    st = State(xref.shape[0], conn.shape[0], nip)
+    st = State(xref.shape[0], conn.shape[0], nip, xref, conn)
     mat = material()
     xold = xref.copy()
     for k in range(1, 3601):
@@ -127,8 +138,8 @@ def test_rigid_spin_stress_free(rule):
         xold = x
     tol = 1e-9 * E * 1e-3
     assert np.max(np.abs(st.sig)) < tol
-    assert np.max(np.abs(st.hgq)) < tol * 1.0  # N/m over elements of size ~1 m
-    assert np.max(np.abs(st.f)) < tol
+    assert np.max(np.abs(st.f)) < tol  # N/m over elements of size ~1 m
+    assert np.max(np.abs(st.ewint)) < tol * 1e-3
 
 
 @pytest.mark.parametrize("rule", ["1pt", "2x2"])
@@ -148,21 +159,55 @@ def test_prestressed_rotation_90(rule):
                                rtol=0, atol=1e-6 * 2.0e6)
 
 
-def test_hourglass_mode_resisted():
-    """Unit square, du = d h in x: no strain, hgq = hg_coef (K + 4G/3) (B.B)/A d, forces oppose."""
+@pytest.mark.parametrize("d", [1e-5, 0.3])
+def test_hourglass_mode_resisted(d):
+    """Unit square, du = d h in x, small or large: no strain, the force -k d gamma with
+    k = hg_coef (K + 4G/3) (B.B)/A and gamma = h/4, and the work k d^2 / 2, exactly."""
     x0 = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
-    d = 1e-5
+    h = np.array([1.0, -1.0, 1.0, -1.0])
     du = np.zeros((4, 2))
-    du[:, 0] = d * np.array([1.0, -1.0, 1.0, -1.0])
-    st = State(4, 1, 1)
+    du[:, 0] = d * h
+    st = State(4, 1, 1, x0, conn)
     assert st.step(q4_forces_1pt, x0 + du, du, conn, material()) == -1
-    # Centroid strain vanishes; B.B / A = A b.b = 2 for the unit square; dq = d (gamma.h = 1)
+    # Centroid strain vanishes; B.B / A = A b.b = 2 for the unit square; q = d (gamma.h = 1)
     assert np.max(np.abs(st.sig)) == 0.0
-    kexp = HGC * (K + 4.0 * G / 3.0) * 2.0
-    # Current geometry of a hourglassed square differs at O(d^2) from the reference
-    np.testing.assert_allclose(st.hgq[0], [kexp * d, 0.0], rtol=1e-9, atol=1e-9 * kexp * d)
-    assert np.sum(st.f * du) < 0.0
+    k = HGC * (K + 4.0 * G / 3.0) * 2.0
+    # q is a difference of the corners' positions: rounding at the element's size, 1
+    np.testing.assert_allclose(st.f[:, 0], -k * d * h / 4.0, rtol=1e-14, atol=1e-15 * k)
+    assert np.all(st.f[:, 1] == 0.0)
+    np.testing.assert_allclose(st.ewint, [0.5 * k * d * d], rtol=1e-14, atol=1e-15 * k * d)
+
+
+def test_hourglass_force_is_the_gradient_of_its_energy():
+    """A jittered mesh drawn far from its reference (stretch, shear, rotation by 2 rad and a
+    random non-affine part): the kernel's hourglass forces equal minus the gradient of the
+    stored hourglass energy by central differences, and an affine map of the reference stores
+    none."""
+    xref, conn = grid(3, 2, 0.25, seed=11)
+    ne = conn.shape[0]
+    st = State(xref.shape[0], ne, 1, xref, conn)
+    c, s = np.cos(2.0), np.sin(2.0)
+    affine = xref @ (np.array([[c, -s], [s, c]]) @ np.array([[1.6, 0.4], [0.0, 0.7]])).T + 3.0
+    x = affine + np.random.default_rng(12).normal(scale=0.05, size=xref.shape)
+    zero = np.zeros((ne, 1, 4))
+
+    def energy(y):
+        out = np.zeros(ne)
+        q4_strain_energy(y, conn, np.zeros(ne, np.int32), material(), zero, st.hg, 0, ne, out)
+        return out.sum()
+
+    # Zero stress and no increment: the kernel's force is the hourglass force alone
+    st.step(q4_forces_1pt, x, np.zeros_like(x), conn, material())
+    st.sig[:] = 0.0
+    grad = np.zeros_like(x)
+    for i in range(x.shape[0]):
+        for k in range(2):
+            e = np.zeros_like(x)
+            e[i, k] = 1e-6
+            grad[i, k] = (energy(x + e) - energy(x - e)) / 2e-6
+    np.testing.assert_allclose(st.f, -grad, rtol=0, atol=1e-6 * np.abs(grad).max())
+    assert energy(affine) < 1e-20 * energy(x)
 
 
 @pytest.mark.parametrize("rule", ["1pt", "2x2"])
@@ -172,11 +217,11 @@ def test_first_step_work_equals_stored_energy(rule):
     xref, conn = grid(2, 2, 0.2, seed=3)
     du = np.random.default_rng(4).uniform(-1e-4, 1e-4, size=xref.shape)
     x = xref + du
-    st = State(x.shape[0], conn.shape[0], nip)
+    st = State(x.shape[0], conn.shape[0], nip, xref, conn)
     assert st.step(fn, x, du, conn, material()) == -1
     out = np.zeros(conn.shape[0])
-    q4_strain_energy(x, conn, np.zeros(conn.shape[0], np.int32), material(), st.sig, st.hgq,
-                     HGC, 0, conn.shape[0], out)
+    q4_strain_energy(x, conn, np.zeros(conn.shape[0], np.int32), material(), st.sig, st.hg, 0,
+                     conn.shape[0], out)
     np.testing.assert_allclose(st.ewint, out, rtol=1e-12)
     assert np.all(out > 0.0) and np.all(st.ewp == 0.0)
 
@@ -216,9 +261,12 @@ def test_numba_matches_numpy(rule):
     runs = []
     for kernel in (fn, ref):
         rng = np.random.default_rng(6)
-        st = State(xref.shape[0], conn.shape[0], nip)
+        st = State(xref.shape[0], conn.shape[0], nip, xref, conn)
         st.sig[:] = rng.normal(size=st.sig.shape) * 1e6
-        st.hgq[:] = rng.normal(size=st.hgq.shape) * 1e3
+        if nip == 1:
+            # The numpy twin's reference agrees with the kernel's
+            twin = numpy_hourglass_reference(xref, conn, np.zeros(12, np.int32), material(), HGC)
+            assert np.max(np.abs(twin - st.hg)) <= 1e-15 * np.max(np.abs(st.hg))
         x = xref.copy()
         for _ in range(4):
             du = rng.uniform(-2e-3, 2e-3, size=x.shape)
@@ -226,7 +274,7 @@ def test_numba_matches_numpy(rule):
             assert st.step(kernel, x, du, conn, material(), 2, 10) == -1
         runs.append(st)
     a, b = runs
-    for u, v in [(a.sig, b.sig), (a.hgq, b.hgq), (a.f, b.f), (a.ewint, b.ewint)]:
+    for u, v in [(a.sig, b.sig), (a.f, b.f), (a.ewint, b.ewint)]:
         assert np.max(np.abs(u - v)) <= 1e-12 * np.max(np.abs(u))
     # Elements outside [2, 10) are untouched
     assert np.all(a.ewint[:2] == 0.0) and np.all(a.ewint[10:] == 0.0)
@@ -302,7 +350,7 @@ def test_one_point_kernel_is_the_material_point_under_uniform_strain():
     mat = np.concatenate([hmx_params(), material()])
     sig, mst = np.zeros((ne, 1, 4)), np.zeros((ne, 1, CAP_NST))
     material_initial_state(mst, emat, mat)
-    hgq, ew, ewp = np.zeros((ne, 2)), np.zeros(ne), np.zeros(ne)
+    hg, ew, ewp = reference(x, conn, mat[emat[:1]]), np.zeros(ne), np.zeros(ne)
     # The two material points, one per row
     point = [(np.zeros(4), mst[np.nonzero(emat == m)[0][0], 0].copy()) for m in (0, 1)]
     ey = -4.0e-3
@@ -310,7 +358,7 @@ def test_one_point_kernel_is_the_material_point_under_uniform_strain():
         du = np.stack([np.zeros(x.shape[0]), ey * x[:, 1]], axis=1)
         x = x + du
         f = np.zeros_like(x)
-        assert q4_forces_1pt(x, du, conn, emat, mat, sig, mst, hgq, HGC, 0, ne, f, ew, ewp,
+        assert q4_forces_1pt(x, du, conn, emat, mat, sig, mst, hg, 0, ne, f, ew, ewp,
                              np.zeros((0, 3))) == -1
         deps = np.array([0.0, ey / (1.0 + 0.5 * ey), 0.0, 0.0])
         for m, (s, st) in enumerate(point):
@@ -334,6 +382,6 @@ def test_an_unknown_material_model_stops_the_one_point_kernel():
     mat = np.concatenate([material(), material(UNKNOWN_MODEL)])
     du = np.full_like(x, 1e-4)
     bad = q4_forces_1pt(x + du, du, conn, emat, mat, np.zeros((ne, 1, 4)), np.zeros((ne, 1, 0)),
-                        np.zeros((ne, 2)), HGC, 0, ne, np.zeros_like(x), np.zeros(ne),
+                        reference(x, conn), 0, ne, np.zeros_like(x), np.zeros(ne),
                         np.zeros(ne), np.zeros((0, 3)))
     assert bad == 5

@@ -63,30 +63,30 @@ def _check(arrays, floats):
 def _load_1pt(lib):
     """Callable of the 1-point elastic kernel (mst, ewp and eth are ignored)."""
     fn = lib.q4_forces_1pt_elastic
-    dbl, i64 = ctypes.c_double, ctypes.c_int64
+    i64 = ctypes.c_int64
     ptr = ctypes.c_void_p
-    fn.argtypes = [ptr, ptr, ptr, ptr, ptr, i64, ptr, ptr, dbl, i64, i64, ptr, ptr]
+    fn.argtypes = [ptr, ptr, ptr, ptr, ptr, i64, ptr, ptr, i64, i64, i64, ptr, ptr]
     fn.restype = i64
 
-    def call(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1, f, ewint, ewp, eth):
-        _check((x, du, conn, emat, mat, sig, hgq, f, ewint), ())
+    def call(x, du, conn, emat, mat, sig, mst, hg, e0, e1, f, ewint, ewp, eth):
+        _check((x, du, conn, emat, mat, sig, hg, f, ewint), ())
         assert conn.dtype == np.int64 and emat.dtype == np.int32
         return fn(x.ctypes.data, du.ctypes.data, conn.ctypes.data, emat.ctypes.data,
-                  mat.ctypes.data, mat.shape[1], sig.ctypes.data, hgq.ctypes.data, hg_coef,
+                  mat.ctypes.data, mat.shape[1], sig.ctypes.data, hg.ctypes.data, hg.shape[0],
                   e0, e1, f.ctypes.data, ewint.ctypes.data)
 
     return call
 
 
 def _load_2x2_cap(lib):
-    """Callable of the 2x2 kernel with material state (hgq, hg_coef ignored as in numba)."""
+    """Callable of the 2x2 kernel with material state (hg ignored as in numba)."""
     fn = lib.q4_forces_2x2_cap
     i64 = ctypes.c_int64
     ptr = ctypes.c_void_p
     fn.argtypes = [ptr, ptr, ptr, ptr, ptr, i64, ptr, ptr, i64, i64, i64, ptr, ptr, ptr]
     fn.restype = i64
 
-    def call(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1, f, ewint, ewp, eth):
+    def call(x, du, conn, emat, mat, sig, mst, hg, e0, e1, f, ewint, ewp, eth):
         _check((x, du, conn, emat, mat, sig, mst, f, ewint, ewp),
                (x, du, mat, sig, mst, f, ewint, ewp))
         assert conn.dtype == np.int64 and emat.dtype == np.int32
@@ -136,7 +136,7 @@ def _load_contact_pass(lib):
 
 def load(name="q4_1pt"):
     """A callable running the C kernel ``name`` (see the module docstring), or None without
-    gcc: for the element kernels ``fn(x, du, conn, emat, mat, sig, mst, hgq, hg_coef, e0, e1,
+    gcc: for the element kernels ``fn(x, du, conn, emat, mat, sig, mst, hg, e0, e1,
     f, ewint, ewp, eth)``, for contact_pass the arguments of a step's pass (_load_contact_pass).
     """
     makers = {"q4_1pt": _load_1pt, "q4_2x2_cap": _load_2x2_cap,

@@ -87,7 +87,7 @@ def print_elements(n, repeat, log=print):
 
 def c_yardstick(nx, ny, repeat):
     """Median seconds per call of the numba 1-point kernel and its C twin on one mesh, and the
-    largest relative difference of their stresses, forces and hourglass forces (or None)."""
+    largest relative difference of their stresses, forces and stress work (or None)."""
     import time
 
     import numpy as np
@@ -95,7 +95,7 @@ def c_yardstick(nx, ny, repeat):
     from pdfem.kernels.element_1pt import q4_forces_1pt
     from pdfem.kernels.params import BULK, ELASTIC, MODEL, NPAR, RHO, SHEAR
     from pdfem.tools.bench.cyardstick import load
-    from pdfem.tools.bench.numpy_element import bench_mesh
+    from pdfem.tools.bench.numpy_element import bench_mesh, hourglass_reference
 
     cfn = load()
     if cfn is None:
@@ -105,14 +105,15 @@ def c_yardstick(nx, ny, repeat):
     mat = np.zeros((1, NPAR))
     mat[0, [MODEL, RHO, BULK, SHEAR]] = [ELASTIC, 2000.0, 1e10, 6e9]
     du = np.random.default_rng(1).uniform(-1e-6, 1e-6, size=x.shape)
+    hg = hourglass_reference(x, conn, np.zeros(ne, np.int32), mat, 0.1)
     out = {}
     for name, fn in (("numba", q4_forces_1pt), ("c", cfn)):
-        sig, hgq = np.zeros((ne, 1, 4)), np.zeros((ne, 2))
+        sig, ewint = np.zeros((ne, 1, 4)), np.zeros(ne)
         f = np.zeros_like(x)
-        args = (x + du, du, conn, np.zeros(ne, np.int32), mat, sig, np.zeros((ne, 1, 0)), hgq,
-                0.1, 0, ne, f, np.zeros(ne), np.zeros(ne), np.zeros((0, 3)))
+        args = (x + du, du, conn, np.zeros(ne, np.int32), mat, sig, np.zeros((ne, 1, 0)), hg,
+                0, ne, f, ewint, np.zeros(ne), np.zeros((0, 3)))
         fn(*args)  # warm-up; also the state compared below (one call from zero)
-        res = (sig.copy(), f.copy(), hgq.copy())
+        res = (sig.copy(), f.copy(), ewint.copy())
         times = []
         for _ in range(repeat):
             t0 = time.perf_counter()

@@ -58,7 +58,7 @@ def _ip_grad(xe, xi, eta):
 
 
 def _stress_points(s, ue, dx, dy, kb, gs):
-    """Objective elastic update of stresses s (n,4) in place; returns (work density, c, sn)."""
+    """Objective elastic update of stresses s (n,4) in place; returns the work density."""
     gxx = gxy = gyx = gyy = 0.0
     for i in range(4):
         gxx = gxx + ue[:, i, 0] * dx[:, i]
@@ -84,7 +84,7 @@ def _stress_points(s, ue, dx, dy, kb, gs):
     s[:, 3] += lam * dv + g2 * dep[:, 3]
     wd = 0.5 * ((sold[:, 0] + s[:, 0]) * dep[:, 0] + (sold[:, 1] + s[:, 1]) * dep[:, 1]
                 + 2.0 * (sold[:, 2] + s[:, 2]) * dep[:, 2] + (sold[:, 3] + s[:, 3]) * dep[:, 3])
-    return wd, c, sn
+    return wd
 
 
 def _first_bad(ok, e0, e1):
@@ -110,8 +110,24 @@ def _hg_gamma(xe, bx, by):
     return 0.25 * (_HG - hx[:, None] * bx - hy[:, None] * by)
 
 
-def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
-                     f, ewint, ewp, eth=None):
+def hourglass_reference(x, conn, emat, mat_params, hg_coef):
+    """numpy twin of pdfem.kernels.element_1pt.hourglass_reference: (ne, 5) hourglass
+    vectors and stiffnesses in the configuration x (elastic only)."""
+    kb, gs = _elastic_params(mat_params, emat)
+    xe = x[conn]
+    a, bx, by = _bvec(xe)
+    hg = np.empty((conn.shape[0], 5))
+    hg[:, :4] = _hg_gamma(xe, bx, by)
+    hg[:, 0] = -(hg[:, 1] + hg[:, 2] + hg[:, 3])
+    bb = 0.0
+    for i in range(4):
+        bb = bb + (bx[:, i] * bx[:, i] + by[:, i] * by[:, i])
+    hg[:, 4] = hg_coef * ((kb + 4.0 * gs / 3.0) * np.maximum(a, 0.0) * bb)
+    return hg
+
+
+def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1, f, ewint, ewp,
+                     eth=None):
     """numpy twin of q4_forces_1pt (elastic only); returns -1 or the first bad element."""
     am, _, _ = _bvec(x[conn[e0:e1]] - 0.5 * du[conn[e0:e1]])
     ac, _, _ = _bvec(x[conn[e0:e1]])
@@ -124,14 +140,8 @@ def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e
     # Stress update at mid-step
     am, bx, by = _bvec(xm)
     s = sig[e0:stop, 0].copy()
-    wd, cr, sn = _stress_points(s, ue, bx, by, kb, gs)
+    wd = _stress_points(s, ue, bx, by, kb, gs)
     sig[e0:stop, 0] = s
-    if hgq.shape[0] > 0:
-        g = _hg_gamma(xm, bx, by)
-        dq0 = dq1 = 0.0
-        for i in range(4):
-            dq0 = dq0 + g[:, i] * ue[:, i, 0]
-            dq1 = dq1 + g[:, i] * ue[:, i, 1]
     # Forces at the current configuration
     a, bx, by = _bvec(xc)
     ewint[e0:stop] += wd * a
@@ -139,27 +149,26 @@ def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e
     fe = np.empty((stop - e0, 4, 2))
     fe[:, :, 0] = a[:, None] * (s[:, 0, None] * bx + s[:, 2, None] * by)
     fe[:, :, 1] = a[:, None] * (s[:, 2, None] * bx + s[:, 1, None] * by)
-    if hgq.shape[0] > 0:
-        bb = 0.0
-        for i in range(4):
-            bb = bb + (bx[:, i] * bx[:, i] + by[:, i] * by[:, i])
-        k = hg_coef * ((kb + 4.0 * gs / 3.0) * a * bb)
-        q0 = cr * hgq[e0:stop, 0] + sn * hgq[e0:stop, 1]
-        q1 = cr * hgq[e0:stop, 1] - sn * hgq[e0:stop, 0]
-        n0 = q0 + k * dq0
-        n1 = q1 + k * dq1
-        hgq[e0:stop, 0] = n0
-        hgq[e0:stop, 1] = n1
-        ewint[e0:stop] += 0.5 * ((q0 + n0) * dq0 + (q1 + n1) * dq1)
-        g = _hg_gamma(xc, bx, by)
-        fe[:, :, 0] += n0[:, None] * g
-        fe[:, :, 1] += n1[:, None] * g
+    if hg.shape[0] > 0:
+        # The hourglass mode of the current and the last positions, its energy's change
+        g, k = hg[e0:stop, :4], hg[e0:stop, 4]
+        q0 = q1 = p0 = p1 = 0.0
+        for i in range(1, 4):
+            q0 = q0 + g[:, i] * (xc[:, i, 0] - xc[:, 0, 0])
+            q1 = q1 + g[:, i] * (xc[:, i, 1] - xc[:, 0, 1])
+        for i in range(1, 4):
+            p0 = p0 + g[:, i] * (ue[:, i, 0] - ue[:, 0, 0])
+            p1 = p1 + g[:, i] * (ue[:, i, 1] - ue[:, 0, 1])
+        p0, p1 = q0 - p0, q1 - p1
+        ewint[e0:stop] += 0.5 * k * ((q0 * q0 + q1 * q1) - (p0 * p0 + p1 * p1))
+        fe[:, :, 0] += (k * q0)[:, None] * g
+        fe[:, :, 1] += (k * q1)[:, None] * g
     _scatter(f, c, fe)
     return rc
 
 
-def numpy_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e0, e1,
-                     f, ewint, ewp, eth=None):
+def numpy_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1, f, ewint, ewp,
+                     eth=None):
     """numpy twin of q4_forces_2x2 (elastic only); returns -1 or the first bad element."""
     xc = x[conn[e0:e1]]
     xm = xc - 0.5 * du[conn[e0:e1]]
@@ -180,7 +189,7 @@ def numpy_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hgq, hg_coef, e
         # Stress update at mid-step, forces and work at the current configuration
         _, dx, dy = _ip_grad(xm, xi, eta)
         s = sig[e0:stop, ip].copy()
-        wd, _, _ = _stress_points(s, ue, dx, dy, kb, gs)
+        wd = _stress_points(s, ue, dx, dy, kb, gs)
         sig[e0:stop, ip] = s
         dv, dx, dy = _ip_grad(xc, xi, eta)
         ewint[e0:stop] += wd * dv
@@ -218,11 +227,12 @@ def bench_elements(nx=200, ny=200, reps=5, rule="1pt"):
     du = np.random.default_rng(1).uniform(-1e-6, 1e-6, size=x.shape)
     emat = np.zeros(ne, dtype=np.int32)
     out = {"elements": ne, "rule": rule}
+    hg = hourglass_reference(x, conn, emat, mat, 0.1) if rule == "1pt" else np.zeros((0, 5))
     kernels = {"1pt": (q4_forces_1pt, numpy_forces_1pt), "2x2": (q4_forces_2x2, numpy_forces_2x2)}
     for name, fn in zip(("numba", "numpy"), kernels[rule], strict=True):
         sig = np.zeros((ne, nip, 4))
-        args = (x + du, du, conn, emat, mat, sig, np.zeros((ne, nip, 0)), np.zeros((ne, 2)),
-                0.1, 0, ne, np.zeros_like(x), np.zeros(ne), np.zeros(ne), np.zeros((0, 3)))
+        args = (x + du, du, conn, emat, mat, sig, np.zeros((ne, nip, 0)), hg, 0, ne,
+                np.zeros_like(x), np.zeros(ne), np.zeros(ne), np.zeros((0, 3)))
         fn(*args)  # warm-up (numba compile / cache load)
         t0 = time.perf_counter()
         for _ in range(reps):

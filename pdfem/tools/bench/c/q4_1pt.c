@@ -1,12 +1,11 @@
 /* The C yardstick of pdfem.kernels.element.q4_forces_1pt for elastic materials: the same
  * algorithm, operation for operation (objective Hughes-Winget update with the Cayley rotation
- * of the mid-step spin, hypo-elastic increment, trapezoidal stress work, Flanagan-Belytschko
- * stiffness hourglass control), flat arrays in. Built by `pdfem bench elements` with
+ * of the mid-step spin, hypo-elastic increment, trapezoidal stress work, total-form stiffness
+ * hourglass control from the reference hg[e] = (gamma_0..3, k)), flat arrays in. Built by `pdfem bench elements` with
  * gcc -O3 -march=native; used to measure how close the numba kernel comes to compiled C.
  * Returns -1, or the first element with a non-positive area. */
 #include <stdint.h>
 
-static const double HG[4] = {1.0, -1.0, 1.0, -1.0};
 enum { RHO = 1, BULK = 2, SHEAR = 3 };
 
 /* Centroid gradients of a quad (x[4][2]); returns the area */
@@ -23,18 +22,11 @@ static double bvec(const double xe[4][2], double bx[4], double by[4]) {
     return a;
 }
 
-/* Hourglass shape vector */
-static void hg_gamma(const double xe[4][2], const double bx[4], const double by[4], double g[4]) {
-    double hx = 0.0, hy = 0.0;
-    for (int i = 0; i < 4; i++) { hx += HG[i] * xe[i][0]; hy += HG[i] * xe[i][1]; }
-    for (int i = 0; i < 4; i++) g[i] = 0.25 * (HG[i] - hx * bx[i] - hy * by[i]);
-}
-
 int64_t q4_forces_1pt_elastic(const double *x, const double *du, const int64_t *conn,
                               const int32_t *emat, const double *mat, int64_t npar, double *sig,
-                              double *hgq, double hg_coef, int64_t e0, int64_t e1, double *f,
+                              const double *hg, int64_t nhg, int64_t e0, int64_t e1, double *f,
                               double *ewint) {
-    double xc[4][2], xm[4][2], ue[4][2], fe[4][2], bx[4], by[4], g[4], deps[4], sold[4];
+    double xc[4][2], xm[4][2], ue[4][2], fe[4][2], bx[4], by[4], deps[4], sold[4];
     for (int64_t e = e0; e < e1; e++) {
         const double *p = mat + (int64_t)emat[e] * npar;
         /* Gather current, mid-step coordinates and increments */
@@ -73,10 +65,6 @@ int64_t q4_forces_1pt_elastic(const double *x, const double *du, const int64_t *
         s[3] += lam * dv + g2 * deps[3];
         double wk = 0.5 * ((sold[0] + s[0]) * deps[0] + (sold[1] + s[1]) * deps[1]
                            + 2.0 * (sold[2] + s[2]) * deps[2] + (sold[3] + s[3]) * deps[3]);
-        /* Hourglass increment at mid-step */
-        double dq0 = 0.0, dq1 = 0.0;
-        hg_gamma(xm, bx, by, g);
-        for (int i = 0; i < 4; i++) { dq0 += g[i] * ue[i][0]; dq1 += g[i] * ue[i][1]; }
         /* Current geometry and the stress-divergence forces */
         double a = bvec(xc, bx, by);
         if (a <= 0.0) return e;
@@ -85,17 +73,20 @@ int64_t q4_forces_1pt_elastic(const double *x, const double *du, const int64_t *
             fe[i][0] = a * (s[0] * bx[i] + s[2] * by[i]);
             fe[i][1] = a * (s[2] * bx[i] + s[1] * by[i]);
         }
-        /* Hourglass forces: rotate, increment, work, forces */
-        double bb = 0.0;
-        for (int i = 0; i < 4; i++) bb += bx[i] * bx[i] + by[i] * by[i];
-        double k = hg_coef * ((p[BULK] + 4.0 * p[SHEAR] / 3.0) * a * bb);
-        double q0 = c * hgq[2 * e] + sn * hgq[2 * e + 1];
-        double q1 = c * hgq[2 * e + 1] - sn * hgq[2 * e];
-        double n0 = q0 + k * dq0, n1 = q1 + k * dq1;
-        hgq[2 * e] = n0; hgq[2 * e + 1] = n1;
-        ewint[e] += 0.5 * ((q0 + n0) * dq0 + (q1 + n1) * dq1);
-        hg_gamma(xc, bx, by, g);
-        for (int i = 0; i < 4; i++) { fe[i][0] += n0 * g[i]; fe[i][1] += n1 * g[i]; }
+        /* Hourglass: the mode of the current and the last positions, energy change, forces */
+        if (nhg > 0) {
+            const double *g = hg + 5 * e;
+            double k = g[4], q0 = 0.0, q1 = 0.0, p0 = 0.0, p1 = 0.0;
+            for (int i = 1; i < 4; i++) {
+                q0 += g[i] * (xc[i][0] - xc[0][0]); q1 += g[i] * (xc[i][1] - xc[0][1]);
+            }
+            for (int i = 1; i < 4; i++) {
+                p0 += g[i] * (ue[i][0] - ue[0][0]); p1 += g[i] * (ue[i][1] - ue[0][1]);
+            }
+            p0 = q0 - p0; p1 = q1 - p1;
+            ewint[e] += 0.5 * k * ((q0 * q0 + q1 * q1) - (p0 * p0 + p1 * p1));
+            for (int i = 0; i < 4; i++) { fe[i][0] += k * q0 * g[i]; fe[i][1] += k * q1 * g[i]; }
+        }
         /* Scatter, f -= fe */
         for (int i = 0; i < 4; i++) {
             int64_t n = conn[4 * e + i];

@@ -228,6 +228,49 @@ def test_jump_closures_and_snowplow():
     assert np.isnan(fr.elastic_speed({"density": 1900.0}))
 
 
+def test_bound_of_the_compacted_crystal():
+    """The densest bed a front of stress sigma leaves: rho_s / ((1 - sigma/K)(1 - W)) with a
+    linear bulk, rho_s / (1 - eta) on the crystal's Hugoniot (p_H(eta) = sigma), NaN where a
+    linear bulk cannot hold sigma; the bound it puts on Us and rho1; the slowest front the
+    sweep drives each piston for is its fixed point."""
+    from pdfem.kernels.eos import hugoniot_pressure
+    from pdfem.tools.study.hugoniot import slowest_front
+
+    lin = {"model": "cap", "bulk": 12.7e9, "W": 0.01}
+    assert fr.compacted_density(1.0e9, 1900.0, lin) == pytest.approx(
+        1900.0 / ((1.0 - 1.0e9 / 12.7e9) * 0.99), rel=1e-14)
+    assert np.isnan(fr.compacted_density(13.0e9, 1900.0, lin))
+    eos = {"model": "elastic", "bulk": 12.7e9, "eos": "us_up", "eos_s": 2.29, "W": 0.5}
+    rho = fr.compacted_density(6.0e9, 1900.0, eos)
+    eta = 1.0 - 1900.0 / rho
+    assert hugoniot_pressure(12.7e9, 2.29, eta) == pytest.approx(6.0e9, rel=1e-12)
+    # Below V/V0 = 1 - 1/s at any stress
+    assert 1900.0 < fr.compacted_density(1.0e12, 1900.0, eos) < 1900.0 / (1.0 - 1.0 / 2.29)
+    b = fr.crystal_bound(1500.0, 6.0e9, 3300.0, 40.0, 1235.0, 2200.0, 1900.0, eos)
+    assert b["rho1_max"] == pytest.approx(rho)
+    assert b["us_min"] == pytest.approx(1500.0 / (1.0 - 1235.0 / rho)) and b["kept"]
+    assert not fr.crystal_bound(1500.0, 6.0e9, 3300.0, 40.0, 1235.0, 1.01 * rho, 1900.0,
+                                eos)["kept"]
+    assert not fr.crystal_bound(1500.0, 6.0e9, b["us_min"] - 41.0, 40.0, 1235.0, 2200.0,
+                                1900.0, eos)["kept"]
+    us = slowest_front(2000.0, 1235.0, 1900.0, eos)
+    assert us == pytest.approx(2000.0 / (1.0 - 1235.0 / fr.compacted_density(
+        1235.0 * us * 2000.0, 1900.0, eos)), rel=1e-10)
+    assert np.isnan(slowest_front(2000.0, 1235.0, 1900.0, lin))
+
+
+def test_folded_area_of_a_corner_pushed_past_the_diagonal():
+    """A unit square: nothing folded; corner 2 moved to (0.25, 0.25): the triangle of corners
+    1, 2, 3, area 1/4."""
+    from pdfem.mesh.quality import folded_area
+
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    conn = np.array([[0, 1, 2, 3]])
+    assert folded_area(x, conn)[0] == 0.0
+    x[2] = [0.25, 0.25]
+    assert folded_area(x, conn)[0] == pytest.approx(0.25, rel=1e-15)
+
+
 def test_hugoniot_and_window_mean():
     """Bed strain from the faces, gauge means over frames, time-averaged window stress."""
     t = np.linspace(0.0, 1.0, 11)
@@ -261,6 +304,7 @@ def test_analyse_synthetic(tmp_path):
     assert s["front"]["arrival_gauge"] == pytest.approx(T_ARR, rel=0.01)
     assert s["gauges"]["hammer_peak"] == pytest.approx(SIGMA)
     assert s["compaction"]["peak"] > 0.3 and s["snowplow"]["us"] < US
+    assert s["bound"]["kept"] and s["mesh"]["folded_max"] == 0.0
     assert s["reference"]["us_min_at_impact_speed"] == pytest.approx(829.1, abs=1.0)
     assert s["reference"]["up_max_at_reference_us"] == pytest.approx(173.7, abs=0.5)
     assert s["run"] == {"wall": 1.5}

@@ -5,6 +5,8 @@
   CSV, Pareto figure, the settings for a 5 % answer) and the element's convergence order;
 - ``study convergence``: the element's observed order on a standing elastic wave;
 - ``study hard``: hard cases on 1 and N ranks;
+- ``study speeds``: the packaged shot-912 piston at several speeds and mesh levels, to the
+  scene's end;
 - ``study width``: the shot-912 wave in beds of several widths and over seeds.
 
 Each study is one entry of :data:`STUDIES`: a function adding its arguments and one running
@@ -398,6 +400,71 @@ def _hotspots(args):
     return 0
 
 
+def _speeds_args(p):
+    from pdfem.tools.study.speeds import BEDS, SPEEDS
+
+    p.add_argument("--bed", choices=tuple(BEDS), default="small", help="the packaged bed: "
+                   "small (shot912_small.toml, 29 grains) or default (shot912.toml, 218 grains; "
+                   "default small)")
+    p.add_argument("--rule", choices=("1pt", "2x2"), default="2x2", help="element rule "
+                   "(default 2x2, the packaged scenes')")
+    p.add_argument("--levels", default="2", help="grain mesh levels (default 2)")
+    p.add_argument("--speeds", default=",".join(f"{v:g}" for v in SPEEDS),
+                   help="piston speeds [m/s] (default %(default)s)")
+    p.add_argument("-p", "--prefix", default="study-speeds", help="writes <prefix>.json and the "
+                   "runs in <prefix>-runs/ (default study-speeds)")
+    p.add_argument("--force", action="store_true", help="overwrite existing output")
+    add_allow_huge(p, f"a run of more than {MAX_STEPS:.0e} steps")
+
+
+def _speeds(args):
+    import json
+
+    from pdfem.cli.paths import check_output_path
+    from pdfem.limits import check_runs
+    from pdfem.parallel.mpi import barrier, world
+    from pdfem.scene import check_ranks, parse_scene
+    from pdfem.tools.study import speeds as sp
+
+    comm = world()
+    levels = _check(_numbers(args.levels, "--levels", int), lambda v: 1 <= v <= 10,
+                    "--levels", "a level in [1, 10]")
+    speeds = _check(_numbers(args.speeds, "--speeds"), lambda v: 0.0 < v < 1.0e5, "--speeds",
+                    "a speed in (0, 1e5) m/s")
+    doc = sp.packaged_doc(args.bed)
+    rungs = []
+    for level in levels:
+        for v in speeds:
+            rung = {"bed": args.bed, "rule": args.rule, "level": level, "velocity": v}
+            scene = parse_scene(sp.piston_doc(doc, v, args.rule, level), ".",
+                                name=f"{sp.BEDS[args.bed]} ({sp.rung_name(rung)})")
+            rungs.append((rung, scene))
+    check_ranks(rungs[0][1], comm.size)
+    check_output_path(args.prefix + ".json", args.force, "--prefix")
+    folder = args.prefix + "-runs"
+    if os.path.exists(folder) and not os.path.isdir(folder):
+        raise InputError(f"--prefix: {folder} exists and is not a folder")
+    check_runs([(sc, sc.name) for _, sc in rungs], comm, args.allow_huge, key="--speeds",
+               remedy="faster pistons or lower --levels")
+    if comm.rank == 0:
+        if os.path.isdir(folder) and args.force:
+            shutil.rmtree(folder)
+        os.makedirs(folder, exist_ok=True)
+    barrier(comm)
+    rows, stops = sp.run_rungs(rungs, folder, comm, log=lambda m: print(m, flush=True))
+    if comm.rank == 0:
+        from pdfem.tools.analysis.summary import _plain
+
+        print("", *sp.table_lines(rows), sep="\n")
+        with open(args.prefix + ".json.part", "w") as f:
+            json.dump(_plain({"bed": args.bed, "rule": args.rule, "rows": rows}), f, indent=1)
+        os.replace(args.prefix + ".json.part", args.prefix + ".json")
+        print(f"pdfem study speeds: {len(rows) - stops} of {len(rows)} runs reach the scene's "
+              f"end; {args.prefix}.json, runs in {folder}/", flush=True)
+    barrier(comm)
+    return 3 if stops else 0
+
+
 # Study name -> (help, add its arguments, run it)
 STUDIES = {
     "accuracy": ("what accuracy costs in time on a shock scene: mesh level, element rule, "
@@ -409,6 +476,9 @@ STUDIES = {
              "migration, squeezing, tight conduction, long settling) on 1 and N ranks: "
              "energy balance, finiteness, Jacobians, bit-identity (under mpirun)",
              _hard_args, _hard),
+    "speeds": ("the packaged shot-912 piston at several speeds and grain mesh levels, each to "
+               "the scene's end: stability (energy balance, folded meshes) and the answer "
+               "against the bound of the compacted bed", _speeds_args, _speeds),
     "width": ("the shot-912 wave in beds of several widths and seeds: Us and arrival against "
               "width, their spread over seeds", _width_args, _width),
     "hotspots": ("mesh convergence of hot spots: the thermal variant of a shock scene at "
@@ -420,7 +490,8 @@ STUDIES = {
 def add_parser(sub):
     p = sub.add_parser("study", help="studies of the solver: accuracy (accuracy against "
                        "cost on a shock scene), convergence (element order), hard (hard "
-                       "cases), width (bed width and seed), hotspots (hot spots against mesh)")
+                       "cases), speeds (the piston from 100 m/s to 2 km/s), width (bed width "
+                       "and seed), hotspots (hot spots against mesh)")
     studies = p.add_subparsers(dest="study", metavar="STUDY", required=True)
     for name, (text, add_args, _) in STUDIES.items():
         add_args(studies.add_parser(name, help=text, description=text))

@@ -1,11 +1,13 @@
 """``pdfem sweep [scene.toml] --velocities 100,200,...``: the bed's compaction Hugoniot.
 
-The shock scene's hammer is driven as a piston at each speed for the snowplow transit time
-(:mod:`pdfem.tools.study.hugoniot`); each run is analysed (steady fronts only are fitted). Writes
-the runs ``<prefix>-v<speed>.h5`` with their summaries, ``<prefix>.json`` (one row per speed)
-and ``<prefix>.png``: Us-up with the precursor, the snowplow bound and the crystal's Hugoniot;
-stress-density with the same and, with ``--static``, the bed's static compression curve
-(``<prefix>-static.h5``). ``--level`` meshes the grains at another level than the scene's.
+The shock scene's hammer is driven as a piston at each speed until the slowest steady front
+the bed allows has crossed it (:mod:`pdfem.tools.study.hugoniot`); each run is analysed
+(steady fronts only are fitted) and checked against the bound of a bed compacted to its
+grains' own compression at the measured stress. Writes the runs ``<prefix>-v<speed>.h5``
+with their summaries, ``<prefix>.json`` (one row per speed) and ``<prefix>.png``: Us-up with
+the precursor, the snowplow speed and the crystal's Hugoniot; stress-density with the same
+and, with ``--static``, the bed's static compression curve (``<prefix>-static.h5``).
+``--level`` meshes the grains at another level than the scene's.
 
 A speed whose run stops on a guard is kept as a marked row (no front, the guard's message)
 and the sweep goes on to the next speed; it then exits with status 3.
@@ -21,7 +23,7 @@ from itertools import pairwise
 from pdfem.errors import InputError, SimulationError
 from pdfem.limits import MAX_STEPS, add_allow_huge
 
-DEFAULT_SPEEDS = "100,200,288,400,500,700,1000"
+DEFAULT_SPEEDS = "100,200,288,400,500,700,1000,1500,2000"
 
 
 def add_parser(sub):
@@ -65,6 +67,8 @@ def _point(v, s, summary):
             "mass_closure": j["mass_closure"], "mass_strain_closure": j["mass_strain_closure"],
             "momentum_closure": j["momentum_closure"],
             "crystal_hugoniot": s["hugoniot"]["crystal"],
+            "rho1_max": s["bound"]["rho1_max"], "us_min": s["bound"]["us_min"],
+            "bound_kept": s["bound"]["kept"], "folded": s["mesh"]["folded_max"],
             "balance_error": summary["balance_error"], "wall_s": summary["wall_s"]}
 
 
@@ -76,8 +80,9 @@ def _stopped(v, exc, bed, snowplow_us):
             "sigma_source": None, "sigma_bed": None, "rho0": bed["rho0"], "rho1": None,
             "solid_density": bed["solid_density"], "snowplow_us": snowplow_us,
             "snowplow_sigma": None, "mass_closure": None, "mass_strain_closure": None,
-            "momentum_closure": None, "crystal_hugoniot": None, "balance_error": None,
-            "wall_s": None, "slowest_us": None}
+            "momentum_closure": None, "crystal_hugoniot": None, "rho1_max": None,
+            "us_min": None, "bound_kept": None, "folded": None, "balance_error": None,
+            "wall_s": None}
 
 
 def _f(v, scale=1.0):
@@ -117,8 +122,7 @@ def run(args):
         check_output_path(out, args.force, "--prefix")
     mat = hg.grain_material(scene.resolved)
     rho_s = sh["solid_density"]
-    slowest = [hg.slowest_front(v, phi0 * rho_s, rho_s, mat["bulk"], mat.get("W", 0.0))
-               for v in speeds]
+    slowest = [hg.slowest_front(v, phi0 * rho_s, rho_s, mat) for v in speeds]
     for v, us in zip(speeds, slowest, strict=True):
         if not us > 0:
             raise InputError(f"--velocities: at {v:g} m/s the wave's stress would crush the "
@@ -162,13 +166,12 @@ def run(args):
         if comm.rank == 0:
             s = analyse(out, os.path.splitext(out)[0])
             points.append(_point(v, s, summary))
-            points[-1]["slowest_us"] = hg.slowest_front(s["shocked"]["up"], s["bed"]["rho0"],
-                                                        rho_s, mat["bulk"], mat.get("W", 0.0))
             p = points[-1]
             print(f"  Us {_f(p['us'])} m/s" + (f" ({p['note']})" if p["note"] else "")
                   + f", precursor {_f(p['precursor'])} m/s, up {_f(p['up'])} m/s, rho1 "
-                  f"{_f(p['rho1'])} kg/m3, stress {_f(p['sigma'], 1e-6)} MPa; snowplow Us "
-                  f"{_f(p['snowplow_us'])} m/s", flush=True)
+                  f"{_f(p['rho1'])} kg/m3, stress {_f(p['sigma'], 1e-6)} MPa; bound of the "
+                  f"compacted crystal Us >= {_f(p['us_min'])} m/s, rho1 <= {_f(p['rho1_max'])} "
+                  f"kg/m3: {'kept' if p['bound_kept'] else 'BROKEN'}", flush=True)
     static = _static(args, static, sh, H0, phi0, width, comm) if args.static else None
     if comm.rank == 0:
         from pdfem.tools.analysis.summary import _plain
@@ -228,7 +231,10 @@ def _static(args, static, sh, H0, phi0, width, comm):
 
 def _checks(points):
     """Lines on the Hugoniot's shape: fronts fitted, monotone Us(up) and stress(density),
-    every front at or above its snowplow bound."""
+    every front against the snowplow speed and the bound of the compacted crystal, meshes that
+    fold."""
+    from pdfem.tools.analysis.summary import FOLDED_LIMIT
+
     ok = [p for p in points if p["us"] is not None and p["us"] == p["us"]]
     lines = [f"{len(ok)} of {len(points)} speeds have a steady front"]
     stopped = [p for p in points if p.get("stopped")]
@@ -241,13 +247,19 @@ def _checks(points):
     lines.append(f"Us rises with up: {'yes' if us_up else 'no'}; stress rises with density: "
                  f"{'yes' if sig_rho else 'no'}")
     below = [p for p in ok if not p["us"] >= p["snowplow_us"]]
-    lines.append("every steady front at or above its snowplow bound" if not below else
-                 "below the snowplow bound (rigid grains): " + ", ".join(
-                     f"{p['velocity']:g} m/s (Us {p['us']:.0f} < {p['snowplow_us']:.0f})"
-                     for p in below))
-    under = [p for p in ok if not p["us"] >= p["slowest_us"]]
-    if below:
-        lines.append("every steady front at or above the bound of grains compressed by their "
-                     "bulk modulus" if not under else "below even the compressed-grain bound: "
-                     + ", ".join(f"{p['velocity']:g} m/s" for p in under))
+    lines.append("every steady front at or above its snowplow speed (rigid grains)" if not below
+                 else "below the snowplow speed (rigid grains; no bound for grains that compress): "
+                 + ", ".join(f"{p['velocity']:g} m/s (Us {p['us']:.0f} < "
+                             f"{p['snowplow_us']:.0f})" for p in below))
+    broken = [p for p in ok if not p["bound_kept"]]
+    lines.append("every steady front keeps the bound of the bed compacted to its grains' own "
+                 "compression" if not broken else "the bound of the bed compacted to its "
+                 "grains' own compression is broken (not a state of this bed): " + ", ".join(
+                     f"{p['velocity']:g} m/s (Us {p['us']:.0f}, bound {p['us_min']:.0f}; rho1 "
+                     f"{p['rho1']:.0f}, bound {p['rho1_max']:.0f})" for p in broken))
+    folded = [p for p in points if p["folded"] is not None and p["folded"] > FOLDED_LIMIT]
+    if folded:
+        lines.append(f"grain meshes folded over themselves (more than {100 * FOLDED_LIMIT:g} % "
+                     "of their area in folded corners; the answer is the mesh's): " + ", ".join(
+                         f"{p['velocity']:g} m/s ({100 * p['folded']:.1f} %)" for p in folded))
     return lines

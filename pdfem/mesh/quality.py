@@ -53,6 +53,14 @@ def point_jacobians(xy, conn, points):
     return np.stack(out, axis=1)
 
 
+def folded_area(xy, conn):
+    """Area [m^2] of every quad's folded corners: the triangle (x_{k-1}, x_k, x_{k+1}) at each
+    corner whose Jacobian is negative, summed; shape (ne,). Zero for a convex quad; a corner
+    pushed past its neighbours' diagonal lays that much of the element over the rest of it
+    (or over a neighbour), counted twice where the quad's signed area counts it once."""
+    return 2.0 * np.clip(-corner_jacobians(xy, conn), 0.0, None).sum(axis=1)
+
+
 def jacobian_ratio(xy, conn):
     """Ratio min/max of the corner Jacobian determinants of every quad; shape (ne,).
 

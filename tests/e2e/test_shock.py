@@ -207,7 +207,8 @@ def test_sweep_on_2_ranks(small_bed, tmp_path):
     assert all(q["sigma_source"] == "piston force" for q in pts)
     assert pts[1]["us_fit"] > pts[0]["us_fit"] > 0 and pts[1]["sigma"] > pts[0]["sigma"] > 0
     assert pts[1]["rho1"] > pts[0]["rho1"]
-    assert all(q["snowplow_us"] > 0 and q["slowest_us"] <= q["snowplow_us"] for q in pts)
+    assert all(q["snowplow_us"] > 0 and q["bound_kept"] for q in pts)
+    assert all(q["us_min"] <= q["us"] and q["rho1"] <= q["rho1_max"] for q in pts)
     st = body["static"]
     assert max(st["density"]) > 1900.0 and max(st["sigma_piston"]) > 1.0e8
     assert st["floor"] < 2.0e7 and st["kinetic_over_work"] < 0.1

@@ -96,3 +96,42 @@ def test_bad_study_input(tmp_path, case):
     assert p.returncode == 2, p.stderr
     assert msg in p.stderr and len(p.stderr.strip().splitlines()) == 1, p.stderr
     assert not (tmp_path / "study-accuracy-runs").exists()
+
+
+def test_speeds_study_on_2_ranks(tmp_path):
+    """The small bed's piston at 1500 m/s, level 1, 1-point rule, through the command on 2
+    ranks: the rung runs to the scene's end, its row holds the answer and its checks, and the
+    run file is the one `pdfem run` makes of the same scene on 1 rank."""
+    import numpy as np
+
+    from pdfem.tools.study.speeds import packaged_doc, piston_doc
+    from tests.helpers import datasets
+
+    p = pdfem(["study", "speeds", "--rule", "1pt", "--levels", "1", "--speeds", "1500"],
+              tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    rows = json.loads((tmp_path / "study-speeds.json").read_text())["rows"]
+    assert len(rows) == 1 and rows[0]["runs"] and rows[0]["velocity"] == 1500.0
+    r = rows[0]
+    # Measured 2026-12-06: Us 3197.5 m/s, 0.40 % balance error, 7.6 % of the area folded
+    assert r["energy_error"] < 0.01 and 3000.0 < r["us"] < 3500.0 and r["folded"] > 0.01
+    assert r["rho1_max"] > 1900.0 and r["us_min"] > 0.0 and isinstance(r["bound_kept"], bool)
+    assert "small    1pt      1     1500  runs" in p.stdout
+    write_scene(tmp_path / "one.toml", piston_doc(packaged_doc("small"), 1500.0, "1pt", 1))
+    one = pdfem(["run", "one.toml", "-o", "one.h5", "--quiet"], tmp_path)
+    assert one.returncode == 0, one.stderr
+    a = datasets(tmp_path / "one.h5")
+    b = datasets(tmp_path / "study-speeds-runs" / "small-1pt-l1-v1500.h5")
+    assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+@pytest.mark.parametrize("extra,msg", [
+    (["--speeds", "0,500"], "--speeds: 0.0 is not a speed in (0, 1e5) m/s"),
+    (["--levels", "11"], "--levels: 11 is not a level in [1, 10]"),
+    (["--rule", "3x3"], "invalid choice: '3x3'"),
+])
+def test_bad_speeds_input(tmp_path, extra, msg):
+    p = pdfem(["study", "speeds"] + extra, tmp_path)
+    assert p.returncode == 2 and msg in p.stderr, p.stderr
+    assert len(p.stderr.strip().splitlines()) == 1, p.stderr
+    assert not (tmp_path / "study-speeds-runs").exists()

@@ -250,6 +250,36 @@ def jump_closures(rho0, rho1, us, up, sigma):
     return {"mass": float(mass), "mass_strain": float(mass_strain), "momentum": float(mom)}
 
 
+def compacted_density(sigma, rho_s, material):
+    """The densest a bed of grains of ``material`` (a materials table, crystal density rho_s)
+    is behind a front of stress sigma [Pa, compressive]: every pore closed and every grain at
+    the compression its own bulk response gives at a mean stress sigma (the crystal's
+    Hugoniot with eos = "us_up", else its linear bulk modulus, sigma/K), less the cap's
+    largest plastic compaction W. NaN where a linear bulk modulus cannot hold sigma. With
+    strength the grains' mean stress is below the front's axial stress, and over grains at
+    unequal stresses the mean compression is below the compression at the mean stress (a
+    stiffening response), so a bed behind a steady front is no denser than this."""
+    from pdfem.kernels.eos import hugoniot_eta
+
+    k0 = float(material["bulk"])
+    w = float(material.get("W", 0.0)) if material.get("model") == "cap" else 0.0
+    if material.get("eos") == "us_up":
+        eta = hugoniot_eta(k0, float(material["eos_s"]), float(sigma))
+    else:
+        eta = sigma / k0
+    return float(rho_s / ((1.0 - eta) * (1.0 - w))) if eta < 1.0 else NAN
+
+
+def crystal_bound(up, sigma, us, us_se, rho0, rho1, rho_s, material):
+    """The bound of a bed compacted to :func:`compacted_density` at the measured stress:
+    rho1 <= rho_max and Us >= up / (1 - rho0/rho_max); whether the measured front keeps it
+    (Us within one standard error of its bound counts as kept)."""
+    rho_max = compacted_density(sigma, rho_s, material)
+    us_min = up / (1.0 - rho0 / rho_max) if rho_max > rho0 else NAN
+    return {"rho1_max": rho_max, "us_min": float(us_min),
+            "kept": bool(rho1 <= rho_max and us + us_se >= us_min)}
+
+
 def snowplow(up, rho0, rho_s):
     """Snowplow (full-compaction) wave for particle velocity up: Us, sigma, rho1 = rho_s."""
     us = up / (1.0 - rho0 / rho_s) if rho0 < rho_s else NAN

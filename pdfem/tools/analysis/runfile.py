@@ -15,6 +15,7 @@ import numpy as np
 
 from pdfem.errors import InputError
 from pdfem.io.runcheck import check_run_file
+from pdfem.mesh.quality import folded_area
 
 # Values of the [shock] keys when an older resolved scene lacks them
 SHOCK_DEFAULTS = {"front_fraction": 0.5, "precursor_fraction": 0.05, "steady_tolerance": 0.1,
@@ -76,6 +77,7 @@ class Run:
     energy: dict
     has_stress: bool
     has_temperature: bool
+    folded: np.ndarray
     notes: list = field(default_factory=list)
 
     def frame(self, k):
@@ -115,12 +117,13 @@ def _finite(a, name, k, path):
     return a
 
 
-def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, path):
+def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, gconn, path):
     """Per frame: grain centroid y and v_y, hammer face y and v_y, anvil face y, the
-    whole hammer's mass-weighted mean y and v_y, and the highest grain node."""
+    whole hammer's mass-weighted mean y and v_y, the highest grain node, and the folded
+    corners' area of the grain elements gconn over their area at frame 0."""
     nf = fr["time"].shape[0]
     gy, gvy = np.zeros((nf, ng)), np.zeros((nf, ng))
-    hy, hvy, ay, my, mvy, top = (np.zeros(nf) for _ in range(6))
+    hy, hvy, ay, my, mvy, top, folded = (np.zeros(nf) for _ in range(7))
     wh = node_mass[hall] / node_mass[hall].sum()
     gmask = node_body < ng
     nb_g, w = node_body[gmask], node_mass[gmask]
@@ -131,6 +134,7 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, path):
         gy[k] = body_means(x[gmask, 1], w, nb_g, ng)
         top[k] = x[gmask, 1].max()
         hy[k], ay[k], my[k] = x[hammer, 1].mean(), x[anvil, 1].mean(), wh @ x[hall, 1]
+        folded[k] = folded_area(x, gconn).sum()
         if has_v:
             v = _finite(fr["v"][k], "v", k, path)
             gvy[k] = body_means(v[gmask, 1], w, nb_g, ng)
@@ -139,7 +143,8 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, path):
     # Without stored velocities, difference the positions
     if not has_v and nf > 1:
         gvy, hvy, mvy = np.gradient(gy, t, axis=0), np.gradient(hy, t), np.gradient(my, t)
-    return t, gy, gvy, hy, hvy, ay, mvy, top
+    folded /= element_areas(fr["x"][0], gconn).sum()
+    return t, gy, gvy, hy, hvy, ay, mvy, top, folded
 
 
 def _drive(scene, hammer):
@@ -204,8 +209,8 @@ def _read(f, path, scene, shock):
     shock.setdefault("solid_density", float(scene["materials"][gmat]["density"]))
     hammer, _, hall = _block_rows(scene, ng, node_body, shock["hammer"], path)
     _, anvil, _ = _block_rows(scene, ng, node_body, shock["anvil"], path)
-    t, gy, gvy, hy, hvy, ay, mvy, top = _reduce_frames(f["frames"], node_mass, node_body, ng,
-                                                       hammer, anvil, hall, path)
+    t, gy, gvy, hy, hvy, ay, mvy, top, folded = _reduce_frames(
+        f["frames"], node_mass, node_body, ng, hammer, anvil, hall, conn[elem_body < ng], path)
     # Gauge series: every group under /gauges but the time axis
     gauges = {n: {"velocity": g["velocity"][:], "stress": g["stress"][:],
                   "force": g["force"][:] if "force" in g else None}
@@ -225,4 +230,4 @@ def _read(f, path, scene, shock):
                grain_top0=float(x0[node_body < ng, 1].max()), gauge_time=f["gauges/time"][:],
                gauges=gauges, drive=_drive(scene, shock["hammer"]), energy=energy,
                has_stress="stress" in f["frames"],
-               has_temperature="temperature" in f["frames"], notes=notes)
+               has_temperature="temperature" in f["frames"], folded=folded, notes=notes)

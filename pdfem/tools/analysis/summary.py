@@ -17,6 +17,9 @@ NAN = float("nan")
 # The files analyse writes after its prefix: the summary always, the figures with plots = "png"
 SUMMARY_SUFFIXES = ("-summary.json", "-summary.txt")
 FIGURE_SUFFIXES = ("-snapshots.png", "-gauges.png", "-xt.png", "-hugoniot.png")
+# Share of the grains' area in folded corners above which the summary calls the meshes
+# folded over themselves (2 x 2 runs at 1-2 km/s stay below 0.1 %)
+FOLDED_LIMIT = 0.01
 
 
 def output_files(prefix, plots="png", thermal=False):
@@ -120,6 +123,12 @@ def compute(run):
                 for k in ("sigma_piston", "sigma_hammer_deceleration", "sigma_bed",
                           "sigma_gauge")}
     snow, snow0 = fr.snowplow(up, rho0, rho_s), fr.snowplow(v0, rho0, rho_s)
+    # The bed compacted to its grains' own compression at the measured stress
+    bound = fr.crystal_bound(up, mom["sigma"], us, fit["se"], rho0, rho1, rho_s,
+                             run.scene["materials"][run.grain_material])
+    # How much of the grains' area lies in folded corners, over the front's window and at the
+    # end (a mesh folded over itself is denser than any material in it)
+    folded = run.folded[frames] if frames.size else run.folded[-1:]
     comp = cp.compaction(t, run.grain_y, run.grain_mass, run.anvil_y, run.hammer_y,
                          run.grain_top, H0)
     # The whole bed's Hugoniot from the faces: a driven (rigid) hammer's face stress is the
@@ -173,6 +182,9 @@ def compute(run):
                  "momentum_closure_gauge": closures["sigma_gauge"]},
         "snowplow": {"us": snow["us"], "sigma": snow["sigma"], "rho1": snow["rho1"],
                      "us_at_impact_speed": snow0["us"]},
+        "bound": {**bound, "sigma": mom["sigma"]},
+        "mesh": {"folded_front": float(np.max(folded)), "folded_end": float(run.folded[-1]),
+                 "folded_max": float(np.max(run.folded))},
         "compaction": {k: comp[k] for k in ("peak", "t_peak", "final", "t_final", "kept",
                                             "peak_height", "final_height")},
         "gauges": {"hammer_peak": float(np.max(hcomp)) if hcomp.size else NAN,
@@ -225,6 +237,7 @@ def report_text(s):
     """The short human-readable report of a summary dict (compression positive)."""
     b, f, p, h, r = s["bed"], s["front"], s["precursor"], s["shocked"], s["reference"]
     d, j, c, sn = s["drive"], s["jump"], s["compaction"], s["snowplow"]
+    bd, m = s["bound"], s["mesh"]
     drive = (f"piston driven at {_f(d['impact_speed'])} m/s"
              + (f", brought to rest over {_f(d['ramp_down'], 1e6, '.2f')} us and released at "
                 f"{_f(d['release'], 1e6, '.2f')} us" if d["release"] is not None else "")
@@ -261,8 +274,17 @@ def report_text(s):
         f"1 - rho0/rho1) {_f(j['mass_strain_closure'], 100)} %; momentum "
         f"{_f(j['momentum_closure'], 100)} % ({h['sigma_source']}), "
         f"{_f(j['momentum_closure_bed'], 100)} % with the stress read in the bed",
-        f"snowplow bound at the measured up: Us >= {_f(sn['us'])} m/s (sigma "
-        f"{_f(sn['sigma'], 1e-6)} MPa); at the drive speed {_f(sn['us_at_impact_speed'])} m/s",
+        f"snowplow (rigid grains, every pore closed) at the measured up: Us = {_f(sn['us'])} "
+        f"m/s (sigma {_f(sn['sigma'], 1e-6)} MPa); at the drive speed "
+        f"{_f(sn['us_at_impact_speed'])} m/s",
+        f"bed compacted to its grains' own compression at the measured stress: rho1 <= "
+        f"{_f(bd['rho1_max'])} kg/m3, Us >= {_f(bd['us_min'])} m/s: "
+        + ("kept" if bd["kept"] else "BROKEN (not a state of this bed)"),
+        f"grain meshes: {_f(m['folded_front'], 100, '.2f')} % of the grains' area in folded "
+        f"corners while the front crosses, {_f(m['folded_end'], 100, '.2f')} % at the end"
+        + ("" if m["folded_max"] <= FOLDED_LIMIT else
+           f" (more than {_f(FOLDED_LIMIT, 100, '.0f')} %: meshes folded over themselves, the "
+           "answer is the mesh's)"),
         f"compaction strain (centre of mass): peak {_f(c['peak'], 1, '.3f')} at "
         f"{_f(c['t_peak'], 1e6, '.2f')} us, final {_f(c['final'], 1, '.3f')} at "
         f"{_f(c['t_final'], 1e6, '.2f')} us ({_f(c['kept'], 100, '.0f')} % of the peak kept); "

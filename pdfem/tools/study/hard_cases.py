@@ -10,14 +10,13 @@ and refinement ladders, which run only when named (``--case speeds``), not with 
 import copy
 import math
 import os
-import tomllib
-from importlib import resources
 
 import numpy as np
 
 from pdfem.io.bedfile import write_bed
 from pdfem.mesh.ellipse import ellipse_mesh, place
 from pdfem.mesh.quality import jacobian_ratio
+from pdfem.tools.study.speeds import packaged_doc, piston_doc
 
 # The elastic grain of the non-shock cases (HMX-like moduli)
 GRAIN = {"model": "elastic", "density": 1900.0, "bulk": 12.7e9, "shear": 4.4e9}
@@ -25,20 +24,12 @@ GRAIN = {"model": "elastic", "density": 1900.0, "bulk": 12.7e9, "shear": 4.4e9}
 SHEAR_RATIO = 10.0
 
 
-def _packaged(name):
-    """Path of a packaged scene file."""
-    return str(resources.files("pdfem") / "scenes" / name)
-
-
 def _shot(size, speed, end_ci, kn0_scale=1.0, end_large=None):
     """Shot 912 (small bed for ci, the packaged bed for large) with the report's grains (6
     fully integrated quads each) and the hammer a free steel plate (the scene's piston
     condition dropped) at ``speed``; large runs until the front has crossed the bed unless
     end_large is given."""
-    name = "shot912_small.toml" if size == "ci" else "shot912.toml"
-    with open(_packaged(name), "rb") as f:
-        doc = tomllib.load(f)
-    doc["grains_file"]["path"] = _packaged(doc["grains_file"]["path"])
+    doc = packaged_doc("small" if size == "ci" else "default")
     doc["element"] = {"rule": "2x2", "level": 1}
     hammer = doc["shock"]["hammer"]
     doc["bc"] = [b for b in doc["bc"] if b.get("body") != hammer]
@@ -75,27 +66,19 @@ def hammer_2000(folder, size):
 
 def _piston(size, speed, level_large, level_ci=1, end_ci=1.0e-7, mesh="ring", eos=True,
             law="area"):
-    """The small shot-912 bed's piston at ``speed`` (times scaled by 288/speed): level_ci for
-    end_ci at CI size, level_large to the scene's end for large, on ``mesh`` meshes; eos: the
-    crystal on its Us-up Hugoniot (eos_s = 2.29, the slope the scene declares); law: the
-    contact law."""
-    with open(_packaged("shot912_small.toml"), "rb") as f:
-        doc = tomllib.load(f)
-    doc["grains_file"]["path"] = _packaged(doc["grains_file"]["path"])
-    for b in doc["blocks"] + doc["bc"]:
-        if "velocity" in b:
-            b["velocity"] = [0.0, -speed]
-        for key in ("release", "ramp_down"):
-            if key in b:
-                b[key] *= 288.0 / speed
-    end = end_ci if size == "ci" else doc["time"]["end"] * 288.0 / speed
-    doc["time"]["end"] = end
-    doc["element"] = {"rule": "2x2", "level": level_ci if size == "ci" else level_large,
-                      "mesh": mesh}
-    if eos:
-        doc["materials"]["hmx"].update(eos="us_up", eos_s=2.29)
-    if law != "area":
-        doc["contact"]["law"] = law
+    """The small shot-912 bed's piston at ``speed`` (pdfem.tools.study.speeds.piston_doc:
+    times scaled by 288/speed): level_ci for end_ci at CI size, level_large to the scene's end
+    for large, on ``mesh`` meshes; eos: the crystal on its Us-up Hugoniot (the packaged
+    scene's), else a linear bulk modulus; law: the contact law."""
+    doc = piston_doc(packaged_doc("small"), speed, "2x2",
+                     level_ci if size == "ci" else level_large, mesh)
+    if size == "ci":
+        doc["time"]["end"] = end_ci
+    end = doc["time"]["end"]
+    if not eos:
+        for key in ("eos", "eos_s"):
+            doc["materials"]["hmx"].pop(key)
+    doc["contact"]["law"] = law
     doc["output"] = {"path": "run.h5", "interval": end / 8, "energy_interval": end / 80}
     doc.pop("shock", None)
     doc.pop("gauges", None)
@@ -291,8 +274,7 @@ def fast_migration(folder, size):
 
 def squeeze_50(folder, size):
     """One cap (HMX) grain squeezed between two steel blocks to half its height at 20 m/s."""
-    with open(_packaged("shot912_small.toml"), "rb") as f:
-        mats = tomllib.load(f)["materials"]
+    mats = packaged_doc("small")["materials"]
     r, gap = 1.0e-4, 2.0e-6
     level = 2 if size == "ci" else 4
     # Travel: the gap, half the height and what the blocks and contacts give elastically
@@ -317,8 +299,7 @@ def squeeze_50(folder, size):
 def hot_conduction(folder, size):
     """Two cap grains colliding at 300 m/s with every heat effect on and a conductivity so
     high that conduction needs several sub-steps per mechanical step."""
-    with open(_packaged("shot912_small.toml"), "rb") as f:
-        mats = tomllib.load(f)["materials"]
+    mats = packaged_doc("small")["materials"]
     mats["hmx"]["conductivity"] = 2.0e5
     level = 2 if size == "ci" else 4
     end = 6.0e-7

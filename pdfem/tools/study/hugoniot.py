@@ -5,8 +5,8 @@ Shock points: the scene's hammer becomes a piston driven at a constant speed v u
 slowest steady compaction wave the bed allows has crossed it (a faster wave arrives earlier
 and meets the anvil); no release. That slowest wave (:func:`slowest_front`) compacts the bed
 fully to grains that are themselves compressed: by the most their material allows under the
-wave's stress (sigma / K elastically, plus the cap's W); with rigid grains it is the
-snowplow wave, Us = up / (1 - rho0/rho_s).
+wave's stress (their Hugoniot with an equation of state, sigma / K with a linear bulk, plus
+the cap's W); with rigid grains it is the snowplow wave, Us = up / (1 - rho0/rho_s).
 
 Static curve: the same bed compressed by the same piston slowly, with every density scaled
 by ``scale`` (mass scaling: the static stress does not depend on mass, the stable step grows
@@ -24,6 +24,7 @@ import numpy as np
 from pdfem.errors import InputError
 from pdfem.mesh.ellipse import ellipse_mesh
 from pdfem.prepare.packing import outlines, polygon_areas
+from pdfem.tools.analysis.front import compacted_density
 
 # Mass scale and piston speed of the static compression: a snowplow floor of
 # 1235 x 100 x 4^2 / 0.35 = 5.6 MPa for the packaged bed
@@ -51,17 +52,18 @@ def bed_figures(scene):
     return H0, area / (width * H0), width
 
 
-def slowest_front(up, rho0, rho_s, bulk, w=0.0):
-    """Slowest steady front at particle velocity up into a bed rho0 of grains rho_s: full
-    compaction to rho1 = rho_s / ((1 - sigma/K)(1 - W)), sigma = rho0 Us up (the grains'
-    volume strain is at most the mean stress over K, the mean stress at most sigma, plus the
-    cap's largest plastic compaction W); Us = up / (1 - rho0/rho1), solved by fixed point."""
+def slowest_front(up, rho0, rho_s, material):
+    """Slowest steady front at particle velocity up into a bed rho0 of grains rho_s of
+    ``material``: full compaction to the densest bed its stress sigma = rho0 Us up allows
+    (pdfem.tools.analysis.front.compacted_density: the grains' own bulk response, with an
+    equation of state its Hugoniot, plus the cap's W); Us = up / (1 - rho0/rho1), solved by
+    fixed point. NaN when no density the bed can hold carries the stress."""
     us = up / (1.0 - rho0 / rho_s)
     for _ in range(200):
-        comp = (1.0 - rho0 * us * up / bulk) * (1.0 - w)
-        if not comp > rho0 / rho_s:
+        rho1 = compacted_density(rho0 * us * up, rho_s, material)
+        if not rho1 > rho0:
             return math.nan
-        new = up / (1.0 - rho0 / (rho_s / comp))
+        new = up / (1.0 - rho0 / rho1)
         if abs(new - us) <= 1e-12 * us:
             break
         us = new

@@ -1,0 +1,127 @@
+"""``pdfem study speeds``: the packaged shot-912 scene's piston at several speeds and grain mesh
+levels, each run to the scene's end, analysed and checked against the bound of its bed.
+
+A rung is the packaged scene (``shot912_small.toml`` or ``shot912.toml``) with only the piston
+changed, as a user would change it: the hammer block's velocity and its ``[[bc]]`` velocity set
+to V, and the scene's end, the piston's release and ramp-down and the output intervals scaled
+by 288 m/s / V, so that the front crosses the bed at every speed; ``[element]`` takes the
+rung's rule and level. Every rung runs on all ranks of the command (the same bits on any
+number); a rung that stops on a guard is a row with the guard's message and the study goes
+on. A row holds what the stability of a hard impact is judged by (to the end or not, the
+largest energy-balance error, the share of the grains' area in folded corners) and what its
+answer is checked with (Us, up, the piston's stress, rho1, the bound of the bed compacted to
+its grains' own compression at that stress, the anvil gauge's arrival, the final compaction).
+"""
+
+import copy
+import os
+import tomllib
+from importlib import resources
+
+# The packaged beds and the speed their times are written for [m/s]
+BEDS = {"small": "shot912_small.toml", "default": "shot912.toml"}
+SCENE_SPEED = 288.0
+SPEEDS = (100.0, 288.0, 500.0, 1000.0, 1500.0, 2000.0)
+
+
+def packaged_doc(bed):
+    """The packaged scene of ``bed`` as a dict, its bed file's path made absolute."""
+    folder = resources.files("pdfem") / "scenes"
+    doc = tomllib.loads((folder / BEDS[bed]).read_text())
+    doc["grains_file"]["path"] = str(folder / doc["grains_file"]["path"])
+    return doc
+
+
+def piston_doc(doc, speed, rule, level, mesh=None):
+    """A rung: ``doc`` with the piston at ``speed`` (hammer block and velocity condition),
+    its end, release, ramp-down and output intervals scaled by SCENE_SPEED / speed, and the
+    element rule and level (and mesh, when given) of the rung. ``doc`` is not changed."""
+    d = copy.deepcopy(doc)
+    f = SCENE_SPEED / speed
+    for b in d.get("blocks", []) + d.get("bc", []):
+        if "velocity" in b:
+            b["velocity"] = [0.0, -speed]
+        for key in ("release", "ramp_down"):
+            if key in b:
+                b[key] *= f
+    d["time"]["end"] *= f
+    for key in ("interval", "energy_interval", "gauge_interval"):
+        if key in d.get("output", {}):
+            d["output"][key] *= f
+    d["element"] = {"rule": rule, "level": level, **({"mesh": mesh} if mesh else {})}
+    return d
+
+
+def rung_name(rung):
+    """The file stem of a rung's run (a dict of bed, rule, level and velocity)."""
+    return f"{rung['bed']}-{rung['rule']}-l{rung['level']}-v{rung['velocity']:g}"
+
+
+def row_of(rung, summary, wall_s, steps):
+    """A table row from a rung (bed, rule, level, speed) and its run's analysis summary."""
+    f, h, bd, m = summary["front"], summary["shocked"], summary["bound"], summary["mesh"]
+    return {**rung, "runs": True, "wall_s": wall_s, "steps": steps,
+            "energy_error": summary["energy"]["balance_error_max"], "us": f["us"],
+            "us_se": f["se"], "steady": f["steady"], "up": h["up"], "sigma": h["sigma"],
+            "rho1": h["rho1"], "rho1_max": bd["rho1_max"], "us_min": bd["us_min"],
+            "bound_kept": bd["kept"], "arrival": f["arrival_gauge"],
+            "compaction": summary["compaction"]["final"], "folded": m["folded_max"],
+            "momentum_closure": summary["jump"]["momentum_closure"]}
+
+
+def stopped_row(rung, message):
+    """The row of a rung whose run stopped on a guard."""
+    return {**rung, "runs": False, "stopped": message}
+
+
+def _pct(v, digits=2):
+    return f"{100.0 * v:.{digits}f} %" if v == v else "-"
+
+
+def table_lines(rows):
+    """The printed table: one line per rung."""
+    out = ["bed      rule level  V [m/s]  result           energy err  folded   Us [m/s]"
+           "          up [m/s]  sigma [GPa]  rho1 (max) [kg/m3]  Us bound  bound   arrival "
+           "[us]  compaction"]
+    for r in rows:
+        head = f"{r['bed']:8s} {r['rule']:4s} {r['level']:5d}  {r['velocity']:7g}  "
+        if not r["runs"]:
+            out.append(head + "stopped: " + r["stopped"])
+            continue
+        out.append(head + f"runs ({r['wall_s']:6.0f} s)  {_pct(r['energy_error'], 3):>10s}  "
+                   f"{_pct(r['folded']):>7s}  {r['us']:7.1f} +- {r['us_se']:5.1f}  "
+                   f"{r['up']:8.1f}  {r['sigma'] * 1e-9:11.3f}  {r['rho1']:7.0f} "
+                   f"({r['rho1_max']:5.0f})    {r['us_min']:8.0f}  "
+                   f"{'kept' if r['bound_kept'] else 'BROKEN':6s}  {r['arrival'] * 1e6:12.4f}  "
+                   f"{r['compaction']:10.3f}")
+    return out
+
+
+def run_rungs(rungs, folder, comm, log=print):
+    """Run every rung (a list of (rung dict, checked scene)) on ``comm`` into ``folder`` and
+    analyse it on rank 0; the rows (rank 0; None elsewhere) and the number that stopped."""
+    from pdfem.driver import run as drive
+    from pdfem.errors import SimulationError
+    from pdfem.solver import Simulation
+    from pdfem.tools.analysis import analyse
+
+    rows, stops = [], 0
+    for rung, scene in rungs:
+        out = os.path.join(folder, rung_name(rung) + ".h5")
+        if comm.rank == 0:
+            log(f"pdfem study speeds: {rung['bed']} bed, {rung['rule']}, level {rung['level']}, "
+                f"piston at {rung['velocity']:g} m/s to {scene.resolved['time']['end'] * 1e6:.3f}"
+                f" us -> {out}")
+        try:
+            summary = drive(Simulation(scene, comm), out, quiet=True)
+        except SimulationError as exc:
+            stops += 1
+            if comm.rank == 0:
+                rows.append(stopped_row(rung, str(exc)))
+                log(f"  stopped: {exc}")
+            continue
+        if comm.rank == 0:
+            s = analyse(out, os.path.splitext(out)[0])
+            rows.append(row_of(rung, s, summary["wall_s"], summary["steps"]))
+            log(table_lines(rows[-1:])[1])
+    return (rows if comm.rank == 0 else None), stops

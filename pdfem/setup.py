@@ -71,8 +71,7 @@ def initial_bodies(sim, scene, init_state):
         init_state(sim, store)
     # The 1-point rule's hourglass modes are measured from this configuration
     if sim.nip == 1:
-        hourglass_reference(store.x, store.conn, store.emat, sim.mat_params, sim.hg_coef, 0,
-                            store.ne_own, store.hgref)
+        hourglass_reference(store.x, store.conn, sim.hg_coef, 0, store.ne_own, store.hgref)
     return store, owner, blocks
 
 

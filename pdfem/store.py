@@ -12,10 +12,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pdfem.kernels.element_1pt import HG_COLS
+
 # Field kinds: one row per body, per node, per element or per contact-history entry
 BODY, NODE, ELEM, PAIR = "body", "node", "elem", "pair"
 # The hourglass reference of a run without one (2x2 rule): no element has hourglass control
-NO_HOURGLASS = np.zeros((0, 5))
+NO_HOURGLASS = np.zeros((0, HG_COLS))
 
 
 @dataclass(frozen=True)
@@ -31,7 +33,7 @@ class Field:
 def core_fields(nip, nst, nacc):
     """The fields every run has, and the 1-point rule's hourglass reference (hgref:
     pdfem.kernels.element_1pt); effects add their own (temperature, ...)."""
-    hourglass = [Field("hgref", ELEM, (5,), np.float64)] if nip == 1 else []
+    hourglass = [Field("hgref", ELEM, (HG_COLS,), np.float64)] if nip == 1 else []
     return [
         Field("gid", BODY, (), np.int64),
         Field("nn", BODY, (), np.int64),

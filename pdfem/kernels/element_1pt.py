@@ -4,19 +4,24 @@ The objective update of pdfem.kernels.element (mid-step gradient, Cayley rotatio
 update, forces at the current configuration) at the element centre, with the mean (=
 centroid) gradient b_I = dN_I/dx, b_x = (y24, y31, y42, y13)/(2A), b_y = (x42, x13, x24,
 x31)/(2A), plus total-form stiffness hourglass control: the Flanagan-Belytschko (1981) hourglass
-vector of h = (1, -1, 1, -1), taken once in the configuration the run starts from,
+vector of h = (1, -1, 1, -1), taken once in the configuration the run starts from (area A0),
     gamma_I = (h_I - (h.X) b_xI - (h.Y) b_yI) / 4     (gamma.h = 1, gamma . linear = 0)
 measures the hourglass mode of the current positions, q_a = sum_I gamma_I x_Ia (zero for
 every affine map of the starting element, rigid motion included; summed over the corners'
 positions relative to corner 0, with gamma_0 = -(gamma_1 + gamma_2 + gamma_3) so that the
-forces add up to zero and q does not lose digits to the grain's distance from the origin),
-and the mode's energy
-    E = k (q.q) / 2,   k = hg_coef (K + 4G/3) (B.B) / A at the start,  B_iI = A b_iI
-gives the nodal forces f_Ia = k q_a gamma_I (internal, subtracted from f). The force is the
-gradient of E, so it does no work beyond E's change whatever the strain or rotation, and its
-work, the change of E over the step (exact for a quadratic energy: the trapezoid of the
-forces), joins ewint. hg[e] = (gamma_0..3, k), from :func:`hourglass_reference`; hg of shape
-(0, 5) switches hourglass control off.
+forces add up to zero and q does not lose digits to the grain's distance from the origin).
+The mode holds the energy
+    E = k (q.q) / 2,   k = hg_coef A0 (b0.b0) M(eta),   M = K(eta) + 4G/3,  eta = 1 - A/A0
+with b0 the starting mean gradients and K the bulk modulus at the element's compression: K0
+with a linear bulk, the tangent of the Hugoniot (pdfem.kernels.eos) with an equation of state,
+so that the spring stiffens with the element as the Flanagan-Belytschko spring does. The
+nodal forces are the gradient of E (internal, subtracted from f),
+    f_Ia = k q_a gamma_I + (q.q / 2) dk/dA A b_Ia,   dk/dA = -hg_coef (b0.b0) dM/deta,
+which add up to zero, have no moment and do no work beyond E's change, whatever the strain or
+rotation; that change, E(x) - E(x - du), joins ewint. M comes from the material's own row
+(no temperature softening), so E is a function of the positions alone. hg[e] = (gamma_0..3,
+hg_coef A0 (b0.b0), A0), from :func:`hourglass_reference`; hg of shape (0, HG_COLS) switches
+hourglass control off.
 
 One kernel for every material and thermal coupling: every quantity of an element lives in
 scalar locals (no scratch arrays), which lets LLVM keep them in registers. A cap point takes
@@ -40,12 +45,39 @@ from pdfem.kernels.element import thermal_row
 from pdfem.kernels.eos import eos_row
 from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_S, MODEL, SHEAR
 
+# Columns of an element's hourglass reference: gamma_0..3, hg_coef A0 (b0.b0), A0
+HG_COLS = 6
+
+
+@njit(cache=True)
+def _area(x0, y0, x1, y1, x2, y2, x3, y3):
+    """Area of a quad (half the cross product of its diagonals)."""
+    return 0.5 * ((x2 - x0) * (y3 - y1) - (x3 - x1) * (y2 - y0))
+
+
+@njit(cache=True)
+def hourglass_modulus(p, eta):
+    """(M, dM/deta) of the module docstring for the material row p at compression eta:
+    M = K + 4G/3 with K the Hugoniot's tangent bulk modulus (pdfem.kernels.eos, eos_s > 0
+    and eta > 0) or K0."""
+    k0, s = p[BULK], p[EOS_S]
+    if not (s > 0.0 and eta > 0.0):
+        return k0 + 4.0 * p[SHEAR] / 3.0, 0.0
+    # K = K0 u v: u = (1 - eta)(1 + s eta), v = (1 - s eta)^-3
+    g = 1.0 - s * eta
+    if not g > 0.0:
+        return math.inf, math.inf
+    u = (1.0 - eta) * (1.0 + s * eta)
+    v = 1.0 / (g * g * g)
+    du = (s - 1.0) - 2.0 * s * eta
+    return k0 * u * v + 4.0 * p[SHEAR] / 3.0, k0 * (du * v + u * 3.0 * s * v / g)
+
 
 @njit(cache=True)
 def _mean_gradient(x0, y0, x1, y1, x2, y2, x3, y3):
     """Area and Flanagan-Belytschko mean gradients (bx0..bx3, by0..by3) of a quad (b unset
     (zero) when the area is not positive)."""
-    a = 0.5 * ((x2 - x0) * (y3 - y1) - (x3 - x1) * (y2 - y0))
+    a = _area(x0, y0, x1, y1, x2, y2, x3, y3)
     if a <= 0.0:
         return a, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
     r = 1.0 / (2.0 * a)
@@ -175,13 +207,24 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, e0, e1, f, ewint,
         fx3, fy3 = a * (t0 * bx3 + t2 * by3), a * (t2 * bx3 + t1 * by3)
         # Hourglass: the mode q of the current positions, its energy's change, its forces
         if has_hg:
-            g0, g1, g2, g3, k = hg[e, 0], hg[e, 1], hg[e, 2], hg[e, 3], hg[e, 4]
+            g0, g1, g2, g3, kr, a0 = hg[e, 0], hg[e, 1], hg[e, 2], hg[e, 3], hg[e, 4], hg[e, 5]
             q0 = g1 * (x1 - x0) + g2 * (x2 - x0) + g3 * (x3 - x0)
             q1 = g1 * (y1 - y0) + g2 * (y2 - y0) + g3 * (y3 - y0)
             p0 = q0 - (g1 * (u1 - u0) + g2 * (u2 - u0) + g3 * (u3 - u0))
             p1 = q1 - (g1 * (v1 - v0) + g2 * (v2 - v0) + g3 * (v3 - v0))
-            ewint[e] += 0.5 * k * ((q0 * q0 + q1 * q1) - (p0 * p0 + p1 * p1))
-            h0, h1 = k * q0, k * q1
+            mp = mat_params[emat[e]]
+            m, dm = hourglass_modulus(mp, 1.0 - a / a0)
+            mo, _ = hourglass_modulus(mp, 1.0 - _area(x0 - u0, y0 - v0, x1 - u1, y1 - v1,
+                                                      x2 - u2, y2 - v2, x3 - u3, y3 - v3) / a0)
+            qq = q0 * q0 + q1 * q1
+            ewint[e] += 0.5 * kr * (m * qq - mo * (p0 * p0 + p1 * p1))
+            h0, h1 = kr * m * q0, kr * m * q1
+            # The spring's stiffening with compression: dE/dA along the area gradient A b_I
+            c = -0.5 * qq * kr * dm * a / a0
+            fx0, fy0 = fx0 + c * bx0, fy0 + c * by0
+            fx1, fy1 = fx1 + c * bx1, fy1 + c * by1
+            fx2, fy2 = fx2 + c * bx2, fy2 + c * by2
+            fx3, fy3 = fx3 + c * bx3, fy3 + c * by3
             fx0, fy0 = fx0 + h0 * g0, fy0 + h1 * g0
             fx1, fy1 = fx1 + h0 * g1, fy1 + h1 * g1
             fx2, fy2 = fx2 + h0 * g2, fy2 + h1 * g2
@@ -199,13 +242,12 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, e0, e1, f, ewint,
 
 
 @njit(cache=True)
-def hourglass_reference(x, conn, emat, mat_params, hg_coef, e0, e1, hg):
-    """hg[e] = (gamma_0..3, k) of elements [e0, e1) in the configuration x (module
-    docstring): the hourglass vector orthogonal to every linear field of that configuration
-    and the stiffness hg_coef (K + 4G/3) A (b.b) of the element's material row (zero for an
-    element whose area is not positive, which the first force evaluation stops on)."""
+def hourglass_reference(x, conn, hg_coef, e0, e1, hg):
+    """hg[e] = (gamma_0..3, hg_coef A (b.b), A) of elements [e0, e1) in the configuration x
+    (module docstring): the hourglass vector orthogonal to every linear field of that
+    configuration, the spring's geometric factor and the area (zero factor for an element
+    whose area is not positive, which the first force evaluation stops on)."""
     for e in range(e0, e1):
-        p = mat_params[emat[e]]
         n0, n1, n2, n3 = conn[e, 0], conn[e, 1], conn[e, 2], conn[e, 3]
         x0, y0, x1, y1 = x[n0, 0], x[n0, 1], x[n1, 0], x[n1, 1]
         x2, y2, x3, y3 = x[n2, 0], x[n2, 1], x[n3, 0], x[n3, 1]
@@ -216,4 +258,5 @@ def hourglass_reference(x, conn, emat, mat_params, hg_coef, e0, e1, hg):
         hg[e, 0], hg[e, 1], hg[e, 2], hg[e, 3] = -(g1 + g2 + g3), g1, g2, g3
         bb = (bx0 * bx0 + by0 * by0 + bx1 * bx1 + by1 * by1 + bx2 * bx2 + by2 * by2
               + bx3 * bx3 + by3 * by3)
-        hg[e, 4] = hg_coef * ((p[BULK] + 4.0 * p[SHEAR] / 3.0) * max(a, 0.0) * bb)
+        hg[e, 4] = hg_coef * max(a, 0.0) * bb
+        hg[e, 5] = a

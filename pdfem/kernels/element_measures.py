@@ -9,6 +9,7 @@ from numba import njit
 
 from pdfem.kernels.elastic import elastic_energy_density
 from pdfem.kernels.element import ETA, GP, XI, _bvec, _ip_grad
+from pdfem.kernels.element_1pt import hourglass_modulus
 from pdfem.kernels.params import RHO
 
 
@@ -42,7 +43,7 @@ def q4_strain_energy(x, conn, emat, mat_params, sig, hg, e0, e1, out):
 
     Sum over points of elastic_energy_density(sig) x point volume (current configuration);
     for the 1-point rule with hg.shape[0] > 0 also the hourglass energy k (q.q) / 2 of
-    pdfem.kernels.element_1pt. A
+    pdfem.kernels.element_1pt (with the element's own material row). A
     non-positive area / Jacobian contributes its (non-positive) volume as is.
     """
     nip = sig.shape[1]
@@ -64,7 +65,8 @@ def q4_strain_energy(x, conn, emat, mat_params, sig, hg, e0, e1, out):
                 for i in range(1, 4):
                     q0 += hg[e, i] * (xc[i, 0] - xc[0, 0])
                     q1 += hg[e, i] * (xc[i, 1] - xc[0, 1])
-                en += 0.5 * hg[e, 4] * (q0 * q0 + q1 * q1)
+                m, _ = hourglass_modulus(p, 1.0 - a / hg[e, 5])
+                en += 0.5 * hg[e, 4] * m * (q0 * q0 + q1 * q1)
         else:
             # 2x2 Gauss points
             for ip in range(4):

@@ -28,8 +28,7 @@ def test_c_twin_matches_numba_to_1e12():
     # measured from a reference other than the last positions
     du = rng.uniform(-2e-3, 2e-3, size=x.shape)
     sig0 = rng.uniform(-1e7, 1e7, (ne, 1, 4))
-    hg = hourglass_reference(x + rng.uniform(-0.05, 0.05, size=x.shape), conn,
-                             np.zeros(ne, np.int32), mat, 0.1)
+    hg = hourglass_reference(x + rng.uniform(-0.05, 0.05, size=x.shape), conn, 0.1)
     out = []
     for fn in (q4_forces_1pt, cfn):
         sig, f, ew = sig0.copy(), np.zeros_like(x), np.zeros(ne)
@@ -75,7 +74,7 @@ def _call_2x2(fn, x, du, conn, emat, mat, state):
     """One call on the state tuple (sig, mst, ewint, ewp) in place; returns (bad, f)."""
     sig, mst, ewint, ewp = state
     f = np.zeros_like(x)
-    bad = fn(x, du, conn, emat, mat, sig, mst, np.zeros((0, 5)), 0, conn.shape[0], f,
+    bad = fn(x, du, conn, emat, mat, sig, mst, np.zeros((0, 6)), 0, conn.shape[0], f,
              ewint, ewp, np.zeros((0, 3)))
     return bad, f
 

@@ -105,7 +105,7 @@ def c_yardstick(nx, ny, repeat):
     mat = np.zeros((1, NPAR))
     mat[0, [MODEL, RHO, BULK, SHEAR]] = [ELASTIC, 2000.0, 1e10, 6e9]
     du = np.random.default_rng(1).uniform(-1e-6, 1e-6, size=x.shape)
-    hg = hourglass_reference(x, conn, np.zeros(ne, np.int32), mat, 0.1)
+    hg = hourglass_reference(x, conn, 0.1)
     out = {}
     for name, fn in (("numba", q4_forces_1pt), ("c", cfn)):
         sig, ewint = np.zeros((ne, 1, 4)), np.zeros(ne)

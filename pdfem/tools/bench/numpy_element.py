@@ -10,7 +10,7 @@ import time
 
 import numpy as np
 
-from pdfem.kernels.params import BULK, ELASTIC, MODEL, SHEAR
+from pdfem.kernels.params import BULK, ELASTIC, EOS_S, MODEL, SHEAR
 
 _XI = np.array([-1.0, 1.0, 1.0, -1.0])
 _ETA = np.array([-1.0, -1.0, 1.0, 1.0])
@@ -19,10 +19,11 @@ _GP = 0.5773502691896257
 
 
 def _elastic_params(mat_params, emat):
-    """(K, G) per element; refuse anything but the elastic model."""
+    """(K, G) per element; refuse anything but the elastic model with a linear bulk."""
     p = mat_params[emat]
-    if np.any(p[:, MODEL].astype(np.int64) != ELASTIC):
-        raise ValueError("numpy element reference supports the ELASTIC model only")
+    if np.any(p[:, MODEL].astype(np.int64) != ELASTIC) or np.any(p[:, EOS_S] > 0.0):
+        raise ValueError("numpy element reference supports the ELASTIC model only, without "
+                         "an equation of state")
     return p[:, BULK], p[:, SHEAR]
 
 
@@ -110,19 +111,19 @@ def _hg_gamma(xe, bx, by):
     return 0.25 * (_HG - hx[:, None] * bx - hy[:, None] * by)
 
 
-def hourglass_reference(x, conn, emat, mat_params, hg_coef):
-    """numpy twin of pdfem.kernels.element_1pt.hourglass_reference: (ne, 5) hourglass
-    vectors and stiffnesses in the configuration x (elastic only)."""
-    kb, gs = _elastic_params(mat_params, emat)
+def hourglass_reference(x, conn, hg_coef):
+    """numpy twin of pdfem.kernels.element_1pt.hourglass_reference: (ne, 6) hourglass
+    vectors, geometric factors and areas in the configuration x."""
     xe = x[conn]
     a, bx, by = _bvec(xe)
-    hg = np.empty((conn.shape[0], 5))
+    hg = np.empty((conn.shape[0], 6))
     hg[:, :4] = _hg_gamma(xe, bx, by)
     hg[:, 0] = -(hg[:, 1] + hg[:, 2] + hg[:, 3])
     bb = 0.0
     for i in range(4):
         bb = bb + (bx[:, i] * bx[:, i] + by[:, i] * by[:, i])
-    hg[:, 4] = hg_coef * ((kb + 4.0 * gs / 3.0) * np.maximum(a, 0.0) * bb)
+    hg[:, 4] = hg_coef * np.maximum(a, 0.0) * bb
+    hg[:, 5] = a
     return hg
 
 
@@ -150,8 +151,9 @@ def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1, f, 
     fe[:, :, 0] = a[:, None] * (s[:, 0, None] * bx + s[:, 2, None] * by)
     fe[:, :, 1] = a[:, None] * (s[:, 2, None] * bx + s[:, 1, None] * by)
     if hg.shape[0] > 0:
-        # The hourglass mode of the current and the last positions, its energy's change
-        g, k = hg[e0:stop, :4], hg[e0:stop, 4]
+        # The hourglass mode of the current and the last positions, its energy's change (a
+        # linear bulk: the spring's modulus K + 4G/3 does not change with the area)
+        g, k = hg[e0:stop, :4], hg[e0:stop, 4] * (kb + 4.0 * gs / 3.0)
         q0 = q1 = p0 = p1 = 0.0
         for i in range(1, 4):
             q0 = q0 + g[:, i] * (xc[:, i, 0] - xc[:, 0, 0])
@@ -227,7 +229,7 @@ def bench_elements(nx=200, ny=200, reps=5, rule="1pt"):
     du = np.random.default_rng(1).uniform(-1e-6, 1e-6, size=x.shape)
     emat = np.zeros(ne, dtype=np.int32)
     out = {"elements": ne, "rule": rule}
-    hg = hourglass_reference(x, conn, emat, mat, 0.1) if rule == "1pt" else np.zeros((0, 5))
+    hg = hourglass_reference(x, conn, 0.1) if rule == "1pt" else np.zeros((0, 6))
     kernels = {"1pt": (q4_forces_1pt, numpy_forces_1pt), "2x2": (q4_forces_2x2, numpy_forces_2x2)}
     for name, fn in zip(("numba", "numpy"), kernels[rule], strict=True):
         sig = np.zeros((ne, nip, 4))

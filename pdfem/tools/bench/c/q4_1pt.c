@@ -1,7 +1,8 @@
 /* The C yardstick of pdfem.kernels.element.q4_forces_1pt for elastic materials: the same
  * algorithm, operation for operation (objective Hughes-Winget update with the Cayley rotation
  * of the mid-step spin, hypo-elastic increment, trapezoidal stress work, total-form stiffness
- * hourglass control from the reference hg[e] = (gamma_0..3, k)), flat arrays in. Built by `pdfem bench elements` with
+ * hourglass control from the reference hg[e] = (gamma_0..3, hg_coef A0 (b0.b0), A0); a linear
+ * bulk, so the spring's modulus K + 4G/3 is constant), flat arrays in. Built by `pdfem bench elements` with
  * gcc -O3 -march=native; used to measure how close the numba kernel comes to compiled C.
  * Returns -1, or the first element with a non-positive area. */
 #include <stdint.h>
@@ -75,8 +76,9 @@ int64_t q4_forces_1pt_elastic(const double *x, const double *du, const int64_t *
         }
         /* Hourglass: the mode of the current and the last positions, energy change, forces */
         if (nhg > 0) {
-            const double *g = hg + 5 * e;
-            double k = g[4], q0 = 0.0, q1 = 0.0, p0 = 0.0, p1 = 0.0;
+            const double *g = hg + 6 * e;
+            double k = g[4] * (p[BULK] + 4.0 * p[SHEAR] / 3.0), q0 = 0.0, q1 = 0.0, p0 = 0.0,
+                   p1 = 0.0;
             for (int i = 1; i < 4; i++) {
                 q0 += g[i] * (xc[i][0] - xc[0][0]); q1 += g[i] * (xc[i][1] - xc[0][1]);
             }

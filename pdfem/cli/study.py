@@ -48,6 +48,21 @@ def _check(vals, ok, option, what):
     return vals
 
 
+def _levels(text):
+    """The --levels list: grain mesh levels 1 to 10."""
+    return _check(_numbers(text, "--levels", int), lambda v: 1 <= v <= 10, "--levels",
+                  "a level in [1, 10]")
+
+
+def _output_args(p, prefix, writes):
+    """-p/--prefix (default ``prefix``; ``writes`` says what it names), --force and
+    --allow-huge of a study that runs scenes."""
+    p.add_argument("-p", "--prefix", default=prefix, help=f"writes {writes} and the runs in "
+                   f"<prefix>-runs/ (default {prefix})")
+    p.add_argument("--force", action="store_true", help="overwrite existing output")
+    add_allow_huge(p, f"a run of more than {MAX_STEPS:.0e} steps")
+
+
 def _rules(text):
     """The --rules list: 1pt and/or 2x2, in that order."""
     from pdfem.tools.study.accuracy import RULES
@@ -130,8 +145,7 @@ def _accuracy(args):
 
     comm = world()
     # Options
-    levels = _check(_numbers(args.levels, "--levels", int), lambda v: 1 <= v <= 10,
-                    "--levels", "a level in [1, 10]")
+    levels = _levels(args.levels)
     rules = _rules(args.rules)
     safeties = _check(_numbers(args.safety, "--safety"), lambda v: 0.0 < v <= 1.0,
                       "--safety", "a safety factor in (0, 1]")
@@ -337,10 +351,7 @@ def _hotspots_args(p):
     p.add_argument("--rule", default=None, help="element rule of every run, 1pt or 2x2 "
                    "(default: the scene's)")
     add_threshold_options(p)
-    p.add_argument("-p", "--prefix", default="study-hotspots", help="writes <prefix>.csv, "
-                   "<prefix>.json and the runs in <prefix>-runs/ (default study-hotspots)")
-    p.add_argument("--force", action="store_true", help="overwrite existing output")
-    add_allow_huge(p, f"a run of more than {MAX_STEPS:.0e} steps")
+    _output_args(p, "study-hotspots", "<prefix>.csv, <prefix>.json")
 
 
 def _hotspots(args):
@@ -353,8 +364,7 @@ def _hotspots(args):
     from pdfem.tools.study import hotspots as hs
 
     comm = world()
-    levels = _check(_numbers(args.levels, "--levels", int), lambda v: 1 <= v <= 10,
-                    "--levels", "a level in [1, 10]")
+    levels = _levels(args.levels)
     thresholds, spot = thresholds_of(args)
     path = _scene_path(args)
     scene = load_scene(path)
@@ -411,10 +421,7 @@ def _speeds_args(p):
     p.add_argument("--levels", default="2", help="grain mesh levels (default 2)")
     p.add_argument("--speeds", default=",".join(f"{v:g}" for v in SPEEDS),
                    help="piston speeds [m/s] (default %(default)s)")
-    p.add_argument("-p", "--prefix", default="study-speeds", help="writes <prefix>.json and the "
-                   "runs in <prefix>-runs/ (default study-speeds)")
-    p.add_argument("--force", action="store_true", help="overwrite existing output")
-    add_allow_huge(p, f"a run of more than {MAX_STEPS:.0e} steps")
+    _output_args(p, "study-speeds", "<prefix>.json")
 
 
 def _speeds(args):
@@ -427,8 +434,7 @@ def _speeds(args):
     from pdfem.tools.study import speeds as sp
 
     comm = world()
-    levels = _check(_numbers(args.levels, "--levels", int), lambda v: 1 <= v <= 10,
-                    "--levels", "a level in [1, 10]")
+    levels = _levels(args.levels)
     speeds = _check(_numbers(args.speeds, "--speeds"), lambda v: 0.0 < v < 1.0e5, "--speeds",
                     "a speed in (0, 1e5) m/s")
     doc = sp.packaged_doc(args.bed)

@@ -113,7 +113,9 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, e0, e1, f, ewint,
     pbuf = np.empty(mat_params.shape[1])
     ebuf = np.empty(mat_params.shape[1])
     for e in range(e0, e1):
-        p = mat_params[emat[e]]
+        # The material's own row (the hourglass spring's) and the step's (softened, EOS)
+        row = mat_params[emat[e]]
+        p = row
         dth = 0.0
         # eth None: numba compiles this kernel without the thermal branches (dth stays 0.0)
         if eth is not None:
@@ -212,19 +214,24 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, e0, e1, f, ewint,
             q1 = g1 * (y1 - y0) + g2 * (y2 - y0) + g3 * (y3 - y0)
             p0 = q0 - (g1 * (u1 - u0) + g2 * (u2 - u0) + g3 * (u3 - u0))
             p1 = q1 - (g1 * (v1 - v0) + g2 * (v2 - v0) + g3 * (v3 - v0))
-            mp = mat_params[emat[e]]
-            m, dm = hourglass_modulus(mp, 1.0 - a / a0)
-            mo, _ = hourglass_modulus(mp, 1.0 - _area(x0 - u0, y0 - v0, x1 - u1, y1 - v1,
-                                                      x2 - u2, y2 - v2, x3 - u3, y3 - v3) / a0)
             qq = q0 * q0 + q1 * q1
+            if row[EOS_S] > 0.0:
+                # The spring stiffens with compression: its modulus now and at the last
+                # positions, and dE/dA along the area gradient A b_I
+                m, dm = hourglass_modulus(row, 1.0 - a / a0)
+                mo, _ = hourglass_modulus(row, 1.0 - _area(x0 - u0, y0 - v0, x1 - u1, y1 - v1,
+                                                           x2 - u2, y2 - v2, x3 - u3,
+                                                           y3 - v3) / a0)
+                c = -0.5 * qq * kr * dm * a / a0
+                fx0, fy0 = fx0 + c * bx0, fy0 + c * by0
+                fx1, fy1 = fx1 + c * bx1, fy1 + c * by1
+                fx2, fy2 = fx2 + c * bx2, fy2 + c * by2
+                fx3, fy3 = fx3 + c * bx3, fy3 + c * by3
+            else:
+                m = row[BULK] + 4.0 * row[SHEAR] / 3.0
+                mo = m
             ewint[e] += 0.5 * kr * (m * qq - mo * (p0 * p0 + p1 * p1))
             h0, h1 = kr * m * q0, kr * m * q1
-            # The spring's stiffening with compression: dE/dA along the area gradient A b_I
-            c = -0.5 * qq * kr * dm * a / a0
-            fx0, fy0 = fx0 + c * bx0, fy0 + c * by0
-            fx1, fy1 = fx1 + c * bx1, fy1 + c * by1
-            fx2, fy2 = fx2 + c * bx2, fy2 + c * by2
-            fx3, fy3 = fx3 + c * bx3, fy3 + c * by3
             fx0, fy0 = fx0 + h0 * g0, fy0 + h1 * g0
             fx1, fy1 = fx1 + h0 * g1, fy1 + h1 * g1
             fx2, fy2 = fx2 + h0 * g2, fy2 + h1 * g2

@@ -71,6 +71,20 @@ class ThermalExpansion(Effect):
     requires = ("heat", "thermoelastic")
     material_keys = ("expansion",)
 
+    @classmethod
+    def check_scene(cls, resolved):
+        """Every material with a linear bulk: the thermal pressure of the coupling is 3 alpha
+        K, and on a Hugoniot's tangent (5 K0 at 6 GPa, 15 K0 at 20 GPa for HMX) it feeds
+        the thermo-elastic heat back into itself until the temperature runs away (measured:
+        the small shot-912 bed's thermal variant at level 3). An equation of state needs its
+        own thermal pressure (a Grueneisen term) for that."""
+        for name, m in resolved["materials"].items():
+            if m.get("eos", "linear") != "linear":
+                raise SceneError(f"materials.{name}.eos", f"\"{m['eos']}\" has no thermal "
+                                 "pressure: [thermal_expansion] and [thermoelastic] need "
+                                 "eos = \"linear\" (their 3 alpha K would grow with the "
+                                 "Hugoniot's bulk modulus and the heating run away)")
+
     def setup(self, st, ctx):
         fill_column(st, ctx, ALPHA, "expansion")
 

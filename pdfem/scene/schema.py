@@ -417,9 +417,11 @@ SECTIONS = [
     Section("thermoelastic", "table", "Thermo-elastic coupling: heat 3 alpha T d(p A) of each "
             "element (p its pressure, A its area: -3 K alpha T dV of the elastic volume change "
             "plus the pressure's share); needs [thermal_expansion], every material needs "
-            "expansion.", THERMOELASTIC),
+            "expansion and a linear bulk (eos = \"linear\": an equation of state has no "
+            "thermal pressure yet).", THERMOELASTIC),
     Section("thermal_expansion", "table", "Isotropic thermal strain alpha dT in the stress "
-            "update; needs [thermoelastic], every material needs expansion.",
+            "update; needs [thermoelastic], every material needs expansion and a linear bulk "
+            "(eos = \"linear\").",
             THERMAL_EXPANSION),
     Section("temperature_dependence", "table", "Moduli (softening) and cap strength "
             "(strength_softening) decrease linearly with temperature; at least one material "

@@ -67,6 +67,10 @@ FILES = {
     "eos_no_s.toml": _good(lambda d: d["materials"]["grain"].update(eos="us_up")),
     "eos_s_alone.toml": _good(lambda d: d["materials"]["grain"].update(eos_s=2.0)),
     "eos_s_big.toml": _good(lambda d: d["materials"]["grain"].update(eos="us_up", eos_s=50.0)),
+    "eos_thermal.toml": _good(lambda d: (
+        d["materials"]["grain"].update(eos="us_up", eos_s=2.0, specific_heat=1000.0,
+                                       expansion=1.0e-5),
+        d.update(heat={}, thermoelastic={}, thermal_expansion={}))),
     "huge.toml": _good(lambda d: d["domain"].update(box=[0.0, 0.0, 1.0e9, 0.006])),
     "effect.toml": _good(lambda d: d.update(viscosityy={"coefficient": 1.0})),
     "fast.toml": _good(lambda d: d.update(blocks=[{
@@ -212,6 +216,8 @@ CASES = {
     "run slope without eos": (["run", "eos_s_alone.toml"],
                               'materials.grain.eos_s: only with eos = "us_up"'),
     "run slope out of range": (["run", "eos_s_big.toml"], "materials.grain.eos_s: must be"),
+    "run thermal expansion with an eos": (["run", "eos_thermal.toml"],
+                                          'materials.grain.eos: "us_up" has no thermal pressure'),
     "run huge": (["run", "huge.toml"], "domain.cell_size: the cell grid would have"),
     "run faster than light": (["run", "fast.toml"], "blocks[0].velocity: must be below"),
     "run unknown effect": (["run", "effect.toml"], "viscosityy: unknown table"),

@@ -41,9 +41,10 @@ def test_hotspot_study_at_two_levels(tmp_path):
         with h5py.File(run) as f:
             effects = f.attrs["effects"].split(",")
             grain = f["mesh/body_kind"][()][f["mesh/elem_body"][()]] == 0
-            # The run is the thermal variant and its grains are meshed at the row's level
-            assert {"heat", "viscous_heating", "friction_heating", "thermoelastic"} <= set(
-                effects)
+            # The run is the thermal variant (the crystal on its Hugoniot: no thermo-elastic
+            # coupling) and its grains are meshed at the row's level
+            assert {"heat", "viscous_heating", "friction_heating"} <= set(effects)
+            assert "thermoelastic" not in effects
             ngrain = int(np.sum(f["mesh/body_kind"][()] == 0))
             assert grain.sum() == ngrain * int(row["quads_per_grain"])
             # The heat by mechanism is the grains' sum of the last frame's fields
@@ -70,10 +71,16 @@ def test_thermal_variant_switches_on_what_the_scene_can_have():
     doc = packaged("shot912_small.toml")
     doc["output"]["fields"] = ["x", "v"]
     hot = thermal_variant(doc)
-    assert {"heat", "conduction", "dissipation_heating", "thermoelastic", "thermal_expansion",
-            "viscous_heating", "friction_heating"} <= set(hot)
+    assert {"heat", "conduction", "dissipation_heating", "viscous_heating",
+            "friction_heating"} <= set(hot)
     assert hot["output"]["fields"] == ["x", "v", "element_temperature", *HEAT_FIELDS]
     assert "heat" not in doc
+    # The thermo-elastic coupling only where every material's bulk is linear (the packaged
+    # crystal is on its Hugoniot)
+    assert "thermoelastic" not in hot and "thermal_expansion" not in hot
+    for key in ("eos", "eos_s"):
+        doc["materials"]["hmx"].pop(key)
+    assert {"thermoelastic", "thermal_expansion"} <= set(thermal_variant(doc))
     # A scene with [heat] keeps its own heat effects
     doc = packaged("shot912_small.toml")
     doc["heat"] = {"initial": 250.0}

@@ -32,10 +32,11 @@ COMPARED = (("mean", "mean"), ("p99", "99th percentile"), ("p99.9", "99.9th perc
 
 def thermal_variant(doc):
     """The scene dict with every heat effect it can have, when it has no [heat]: heat,
-    conduction, thermo-elastic coupling with thermal expansion, dissipation heating, and,
-    where their owner is present, viscous heating ([bulk_viscosity]) and friction heating
-    ([contact]). A scene with [heat] keeps its own heat effects. Either way a given
-    output.fields gains element_temperature and the heat_* fields the census reads."""
+    conduction, dissipation heating, thermo-elastic coupling with thermal expansion when every
+    material's bulk is linear, and, where their owner is present, viscous heating
+    ([bulk_viscosity]) and friction heating ([contact]). A scene with [heat] keeps its own
+    heat effects. Either way a given output.fields gains element_temperature and the heat_*
+    fields the census reads."""
     out = copy.deepcopy(doc)
     fields = out.get("output", {}).get("fields")
     if fields is not None:
@@ -44,9 +45,13 @@ def thermal_variant(doc):
         out["output"]["fields"] = list(dict.fromkeys(list(fields) + heat))
     if "heat" in out:
         return out
-    for name in ("heat", "conduction", "dissipation_heating", "thermoelastic",
-                 "thermal_expansion"):
+    for name in ("heat", "conduction", "dissipation_heating"):
         out[name] = {}
+    # The thermo-elastic coupling needs every material's bulk linear (an equation of state
+    # has no thermal pressure: pdfem.effects.thermal.ThermalExpansion)
+    if all(m.get("eos", "linear") == "linear" for m in out.get("materials", {}).values()):
+        out["thermoelastic"] = {}
+        out["thermal_expansion"] = {}
     if "bulk_viscosity" in out:
         out["viscous_heating"] = {}
     if "contact" in out:

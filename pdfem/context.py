@@ -33,6 +33,8 @@ class Context:
         # effects, the energy terms, whether contact forces exist
         self.scene, self.layout, self.fields, self.nip = sim.scene, sim.layout, sim.fields, \
             sim.nip
+        # The 1-point rule's hourglass spring modulus (pdfem.kernels.element_1pt)
+        self.hg_model = sim.hg_model
         self.effects, self.effect_names, self.terms = sim.effects, sim.effect_names, sim.terms
         self.has_contact = sim.has_contact
 

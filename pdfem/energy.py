@@ -118,8 +118,8 @@ def initial_strain_work(st, ctx):
     prepared bed starts stressed), so that the strain term is that energy plus the work since."""
     s = st.store
     ee = np.zeros(s.ne_own)
-    q4_strain_energy(s.x, s.conn, s.emat, ctx.mat_params, s.sig, s.hourglass, 0,
-                     s.ne_own, ee)
+    q4_strain_energy(s.x, s.conn, s.emat, ctx.mat_params, s.sig, s.hourglass,
+                     ctx.hg_model, 0, s.ne_own, ee)
     s.ewint[: s.ne_own] += ee
 
 

@@ -26,7 +26,7 @@ from pdfem.errors import SimulationError
 from pdfem.guards import Guards
 from pdfem.kernels.checks import first_nonfinite
 from pdfem.kernels.element import q4_forces_2x2
-from pdfem.kernels.element_1pt import q4_forces_1pt
+from pdfem.kernels.element_1pt import HG_BENDING, HG_COEFFICIENT, HG_FULL, q4_forces_1pt
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, moves_half_skin
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
@@ -70,7 +70,12 @@ class Simulation:
         el = r["element"]
         self.nip = 1 if el["rule"] == "1pt" else 4
         self.element_kernel = q4_forces_1pt if el["rule"] == "1pt" else q4_forces_2x2
-        self.hg_coef = float(el["hourglass"]) if el["rule"] == "1pt" else 0.0
+        # The 1-point rule's hourglass spring: its modulus and coefficient
+        kind = el["hourglass_stiffness"]
+        self.hg_model = {"bending": HG_BENDING, "full": HG_FULL}.get(kind, HG_COEFFICIENT)
+        self.hg_coef = 0.0
+        if el["rule"] == "1pt":
+            self.hg_coef = float(el["hourglass"]) if kind == "coefficient" else 1.0
         self.fields = core_fields(self.nip, nst, NACC)
         for eff in self.effects:
             self.fields += [f for f in eff.extra_fields if f not in self.fields]
@@ -281,7 +286,8 @@ class Simulation:
             eff.before_elements(st, self.ctx)
         with self.timers.phase("elements"):
             bad = self.element_kernel(s.x, self.du, s.conn, s.emat, self.mat_params, s.sig,
-                                      s.mst, s.hourglass, 0, s.ne_own, self.f, s.ewint,
+                                      s.mst, s.hourglass, self.hg_model, 0, s.ne_own, self.f,
+                                      s.ewint,
                                       s.ewp, s.eth if self.coupled else self.no_eth)
         if bad >= 0:
             self.fail(self._element_failure(bad))

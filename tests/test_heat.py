@@ -358,7 +358,7 @@ def test_temperature_dependence_softens_the_elastic_increment():
     sig = np.zeros((1, 1, 4))
     eth = np.array([[0.0, 400.0, 0.0]])
     q4_forces_1pt(x + du, du, conn, np.zeros(1, np.int32), mat, sig, np.zeros((1, 1, 0)),
-                  np.zeros((0, 6)), 0, 1, np.zeros((4, 2)), np.zeros(1), np.zeros(1), eth)
+                  np.zeros((0, 6)), 0, 0, 1, np.zeros((4, 2)), np.zeros(1), np.zeros(1), eth)
     kb, g = 8e9, 3.2e9
     # (the mid-step gradient du / (x - du/2) differs from 1e-6 by 5e-7 relative)
     assert sig[0, 0, 0] == pytest.approx((kb + 4 * g / 3) * 1e-6, rel=1e-5)

@@ -88,7 +88,8 @@ def test_minimal_scene_defaults(tmp_path, monkeypatch):
     r = s.resolved
     assert r["time"] == {"end": 1e-5, "safety": 0.5, "dt_max": math.inf, "dt_min": 0.0,
                          "max_steps": 0}
-    assert r["element"] == {"rule": "1pt", "hourglass": 0.05, "level": 1, "mesh": "kite"}
+    assert r["element"] == {"rule": "1pt", "hourglass_stiffness": "coefficient",
+                            "hourglass": 0.05, "level": 1, "mesh": "kite"}
     assert r["materials"]["glass"]["model"] == "elastic"
     assert r["grains"][0]["angle"] == 0.0 and r["grains"][0]["velocity"] == [0.0, 0.0]
     # Auto skin = 0.1 x smallest minor diameter; auto cell = largest diameter + skin
@@ -301,6 +302,11 @@ MISTAKES = [
      'materials.glass.A: unknown key for model "elastic"'),
     ("level out of range", _set(("element", "level"), 11),
      "element.level: must be in [1, 10] (got 11)"),
+    ("coefficient with bending", _set(("element",), {"hourglass_stiffness": "bending",
+                                                     "hourglass": 0.1}),
+     'element.hourglass: only with hourglass_stiffness = "coefficient"'),
+    ("unknown hourglass stiffness", _set(("element",), {"hourglass_stiffness": "stiff"}),
+     'element.hourglass_stiffness: must be one of "coefficient", "bending", "full"'),
     ("cell_size too small", _set(("domain", "cell_size"), 1e-4),
      "domain.cell_size: must be >= "),
     ("grain outside box", _set(("grains", 0, "center"), [0.0005, 0.01]),

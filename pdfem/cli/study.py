@@ -419,6 +419,8 @@ def _speeds_args(p):
     p.add_argument("--rule", choices=("1pt", "2x2"), default="2x2", help="element rule "
                    "(default 2x2, the packaged scenes')")
     p.add_argument("--levels", default="2", help="grain mesh levels (default 2)")
+    p.add_argument("--mesh", choices=("kite", "ring"), default=None, help="grain mesh "
+                   "(default the packaged scenes', kite)")
     p.add_argument("--speeds", default=",".join(f"{v:g}" for v in SPEEDS),
                    help="piston speeds [m/s] (default %(default)s)")
     _output_args(p, "study-speeds", "<prefix>.json")
@@ -442,7 +444,7 @@ def _speeds(args):
     for level in levels:
         for v in speeds:
             rung = {"bed": args.bed, "rule": args.rule, "level": level, "velocity": v}
-            scene = parse_scene(sp.piston_doc(doc, v, args.rule, level), ".",
+            scene = parse_scene(sp.piston_doc(doc, v, args.rule, level, args.mesh), ".",
                                 name=f"{sp.BEDS[args.bed]} ({sp.rung_name(rung)})")
             rungs.append((rung, scene))
     check_ranks(rungs[0][1], comm.size)
@@ -463,7 +465,8 @@ def _speeds(args):
 
         print("", *sp.table_lines(rows), sep="\n")
         with open(args.prefix + ".json.part", "w") as f:
-            json.dump(_plain({"bed": args.bed, "rule": args.rule, "rows": rows}), f, indent=1)
+            json.dump(_plain({"bed": args.bed, "rule": args.rule, "mesh": args.mesh or "kite",
+                              "rows": rows}), f, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         print(f"pdfem study speeds: {len(rows) - stops} of {len(rows)} runs reach the scene's "
               f"end; {args.prefix}.json, runs in {folder}/", flush=True)

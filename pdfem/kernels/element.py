@@ -170,9 +170,9 @@ def _scatter(conn, e, fe, f):
 
 
 @njit(cache=True)
-def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1,
+def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, e1,
                   f, ewint, ewp, eth):
-    """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hg is ignored.
+    """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hg and hg_model are ignored.
 
     Updates sig (ne,4,4) and mstate per point; subtracts internal forces from f element by
     element; adds stress work to ewint and plastic work to ewp (weights x current det J).

@@ -11,10 +11,21 @@ every affine map of the starting element, rigid motion included; summed over the
 positions relative to corner 0, with gamma_0 = -(gamma_1 + gamma_2 + gamma_3) so that the
 forces add up to zero and q does not lose digits to the grain's distance from the origin).
 The mode holds the energy
-    E = k (q.q) / 2,   k = hg_coef A0 (b0.b0) M(eta),   M = K(eta) + 4G/3,  eta = 1 - A/A0
-with b0 the starting mean gradients and K the bulk modulus at the element's compression: K0
-with a linear bulk, the tangent of the Hugoniot (pdfem.kernels.eos) with an equation of state,
-so that the spring stiffens with the element as the Flanagan-Belytschko spring does. The
+    E = k (q.q) / 2,   k = hg_coef A0 (b0.b0) M(eta),   eta = 1 - A/A0,
+with b0 the starting mean gradients and M a modulus of the element's material at its
+compression, K(eta) its bulk modulus (K0 with a linear bulk, the tangent of the Hugoniot,
+pdfem.kernels.eos, with an equation of state) and G its shear modulus:
+- HG_COEFFICIENT: M = K(eta) + 4G/3, scaled by the scene's coefficient hg_coef;
+- HG_BENDING: M = (2/3) E', E' = 4G (3K(eta) + G)/(3K(eta) + 4G), hg_coef = 1: the element's
+  own bending stiffness. For a rectangle of sides 2a x 2b moved in its hourglass mode
+  (u = q xi eta), the continuum bends: the strain of the mode in x is q eta/a, and with no
+  shear and the stress across free (plane strain) it holds (A/3) E' q_x^2/(2 a^2) (Belytschko
+  & Bindeman 1991, the assumed strain that makes the element exact in bending). The two modes
+  of the rectangle cost k_x = (4/3) E' b/a and k_y = (4/3) E' a/b; their mean is the spring's
+  k = (2/3) E' A (b.b) (A (b.b) = a/b + b/a), exact for a square and, for an elongated element,
+  stiffer in its soft mode, as the 2 x 2 rule is. E' stays below 4G however stiff the bulk:
+  bending changes no volume.
+The spring stiffens with the element as the Flanagan-Belytschko spring does. The
 nodal forces are the gradient of E (internal, subtracted from f),
     f_Ia = k q_a gamma_I + (q.q / 2) dk/dA A b_Ia,   dk/dA = -hg_coef (b0.b0) dM/deta,
 which add up to zero, have no moment and do no work beyond E's change, whatever the strain or
@@ -47,6 +58,10 @@ from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_S, MODEL, SHEAR
 
 # Columns of an element's hourglass reference: gamma_0..3, hg_coef A0 (b0.b0), A0
 HG_COLS = 6
+# The hourglass spring's modulus (module docstring): the coefficient's or the bending one
+HG_COEFFICIENT = 0
+HG_BENDING = 1
+HG_FULL = 2
 
 
 @njit(cache=True)
@@ -56,13 +71,13 @@ def _area(x0, y0, x1, y1, x2, y2, x3, y3):
 
 
 @njit(cache=True)
-def hourglass_modulus(p, eta):
-    """(M, dM/deta) of the module docstring for the material row p at compression eta:
-    M = K + 4G/3 with K the Hugoniot's tangent bulk modulus (pdfem.kernels.eos, eos_s > 0
-    and eta > 0) or K0."""
+def _tangent_bulk(p, eta):
+    """(K, dK/deta): the Hugoniot's tangent bulk modulus of the material row p at compression
+    eta (pdfem.kernels.eos; eos_s > 0 and eta > 0), else K0 and 0 (inf past the Hugoniot's
+    limit 1 - s eta = 0)."""
     k0, s = p[BULK], p[EOS_S]
     if not (s > 0.0 and eta > 0.0):
-        return k0 + 4.0 * p[SHEAR] / 3.0, 0.0
+        return k0, 0.0
     # K = K0 u v: u = (1 - eta)(1 + s eta), v = (1 - s eta)^-3
     g = 1.0 - s * eta
     if not g > 0.0:
@@ -70,7 +85,24 @@ def hourglass_modulus(p, eta):
     u = (1.0 - eta) * (1.0 + s * eta)
     v = 1.0 / (g * g * g)
     du = (s - 1.0) - 2.0 * s * eta
-    return k0 * u * v + 4.0 * p[SHEAR] / 3.0, k0 * (du * v + u * 3.0 * s * v / g)
+    return k0 * u * v, k0 * (du * v + u * 3.0 * s * v / g)
+
+
+@njit(cache=True)
+def hourglass_modulus(p, eta, model):
+    """(M, dM/deta) of the module docstring for the material row p at compression eta, K the
+    tangent bulk modulus (_tangent_bulk): M = K + 4G/3 for HG_COEFFICIENT, M = (2/3) E' with
+    E' = 4G (3K + G)/(3K + 4G) (plane-strain bending, E' -> 4G as K -> inf) for HG_BENDING."""
+    k, dk = _tangent_bulk(p, eta)
+    g = p[SHEAR]
+    if model == HG_BENDING:
+        if k == math.inf:
+            return 8.0 * g / 3.0, 0.0
+        r = 1.0 / (3.0 * k + 4.0 * g)
+        return 8.0 * g * (3.0 * k + g) * r / 3.0, 24.0 * g * g * r * r * dk
+    if model == HG_FULL:
+        return 2.0 * (k + 7.0 * g / 3.0) / 3.0, 2.0 * dk / 3.0
+    return k + 4.0 * g / 3.0, dk
 
 
 @njit(cache=True)
@@ -95,9 +127,10 @@ def _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1, by2, by
 
 
 @njit(cache=True)
-def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, e0, e1, f, ewint, ewp, eth):
-    """One-point quads with total-form hourglass control (hg, module docstring) on elements
-    [e0, e1).
+def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1, f, ewint, ewp,
+                  eth):
+    """One-point quads with total-form hourglass control (hg, with the spring's modulus
+    hg_model: HG_COEFFICIENT or HG_BENDING, module docstring) on elements [e0, e1).
 
     Updates sig (ne,1,4) and mst (ne,1,nst) in place, subtracts the internal
     forces from f (nn,2) element by element, adds stress and hourglass work to ewint and
@@ -218,17 +251,17 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, e0, e1, f, ewint,
             if row[EOS_S] > 0.0:
                 # The spring stiffens with compression: its modulus now and at the last
                 # positions, and dE/dA along the area gradient A b_I
-                m, dm = hourglass_modulus(row, 1.0 - a / a0)
+                m, dm = hourglass_modulus(row, 1.0 - a / a0, hg_model)
                 mo, _ = hourglass_modulus(row, 1.0 - _area(x0 - u0, y0 - v0, x1 - u1, y1 - v1,
                                                            x2 - u2, y2 - v2, x3 - u3,
-                                                           y3 - v3) / a0)
+                                                           y3 - v3) / a0, hg_model)
                 c = -0.5 * qq * kr * dm * a / a0
                 fx0, fy0 = fx0 + c * bx0, fy0 + c * by0
                 fx1, fy1 = fx1 + c * bx1, fy1 + c * by1
                 fx2, fy2 = fx2 + c * bx2, fy2 + c * by2
                 fx3, fy3 = fx3 + c * bx3, fy3 + c * by3
             else:
-                m = row[BULK] + 4.0 * row[SHEAR] / 3.0
+                m, _ = hourglass_modulus(row, 0.0, hg_model)
                 mo = m
             ewint[e] += 0.5 * kr * (m * qq - mo * (p0 * p0 + p1 * p1))
             h0, h1 = kr * m * q0, kr * m * q1

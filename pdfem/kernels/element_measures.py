@@ -38,12 +38,13 @@ def q4_lumped_mass(x, conn, emat, mat_params, e0, e1, m):
 
 
 @njit(cache=True)
-def q4_strain_energy(x, conn, emat, mat_params, sig, hg, e0, e1, out):
+def q4_strain_energy(x, conn, emat, mat_params, sig, hg, hg_model, e0, e1, out):
     """out[e] = stored elastic energy of element e in [e0, e1) [J/m].
 
     Sum over points of elastic_energy_density(sig) x point volume (current configuration);
     for the 1-point rule with hg.shape[0] > 0 also the hourglass energy k (q.q) / 2 of
-    pdfem.kernels.element_1pt (with the element's own material row). A
+    pdfem.kernels.element_1pt (with the element's own material row and the spring's modulus
+    hg_model). A
     non-positive area / Jacobian contributes its (non-positive) volume as is.
     """
     nip = sig.shape[1]
@@ -65,7 +66,7 @@ def q4_strain_energy(x, conn, emat, mat_params, sig, hg, e0, e1, out):
                 for i in range(1, 4):
                     q0 += hg[e, i] * (xc[i, 0] - xc[0, 0])
                     q1 += hg[e, i] * (xc[i, 1] - xc[0, 1])
-                m, _ = hourglass_modulus(p, 1.0 - a / hg[e, 5])
+                m, _ = hourglass_modulus(p, 1.0 - a / hg[e, 5], hg_model)
                 en += 0.5 * hg[e, 4] * m * (q0 * q0 + q1 * q1)
         else:
             # 2x2 Gauss points

@@ -49,9 +49,15 @@ TIME = {
 ELEMENT = {
     "rule": Key("str", "1pt", "quadrature: one point with hourglass control, or 2x2 Gauss",
                 choices=("1pt", "2x2")),
-    "hourglass": Key("float", 0.05, "hourglass stiffness coefficient (rule 1pt): the spring on "
-                     "the hourglass mode measured from the configuration the run starts from",
-                     lo=0.0, hi=0.5),
+    "hourglass_stiffness": Key("str", "coefficient", "the 1-point rule's spring on the "
+                               "hourglass mode measured from the configuration the run starts "
+                               "from: hourglass x (K + 4G/3), the element's plane-strain bending "
+                               "stiffness (2/3) E', or the 2x2 rule's (2/3)(K + 7G/3), times the "
+                               "element's geometric factor A0 (b0.b0)",
+                               choices=("coefficient", "bending", "full")),
+    "hourglass": Key("float", Derived('0.05 with hourglass_stiffness = "coefficient"'),
+                     "hourglass stiffness coefficient (rule 1pt, hourglass_stiffness = "
+                     '"coefficient" only)', lo=0.0, hi=0.5),
     "level": Key("int", 1, "grain mesh refinement: each grain has 6 level^2 quads (kite) or "
                  "6 level^2 + 12 level (ring)", lo=1, hi=10),
     "mesh": Key("str", "kite", "grain mesh: the report's six kites subdivided, or a kite core "

@@ -43,6 +43,7 @@ def resolve(doc, base_dir):
         if name in doc or name not in S.PRESENCE_TABLES:
             r[name] = check_table(doc.get(name, {}), secs[name].keys, name)
     _time_rules(r["time"])
+    _element_rules(r["element"])
     _domain_rules(r["domain"])
     r["materials"] = _materials(doc["materials"])
     mat_ids = {name: i for i, name in enumerate(r["materials"])}
@@ -136,6 +137,19 @@ def _time_rules(t):
     if t["dt_min"] >= t["dt_max"]:
         raise SceneError("time.dt_min", f"must be < time.dt_max = {show(t['dt_max'])} "
                          f"(got {show(t['dt_min'])})")
+
+
+def _element_rules(el):
+    """The coefficient of the hourglass spring is the coefficient stiffness's alone."""
+    if el["hourglass_stiffness"] == "coefficient":
+        el.setdefault("hourglass", 0.05)
+    elif "hourglass" in el:
+        raise SceneError("element.hourglass", 'only with hourglass_stiffness = "coefficient" '
+                         '(the bending stiffness has no coefficient)')
+    # Keep the schema's key order in the resolved table
+    items = sorted(el.items(), key=lambda kv: list(S.ELEMENT).index(kv[0]))
+    el.clear()
+    el.update(items)
 
 
 def _domain_rules(d):

@@ -15,7 +15,8 @@ from pdfem.tools.bench.cyardstick import load
 from pdfem.tools.bench.numpy_element import bench_mesh, hourglass_reference
 
 
-def test_c_twin_matches_numba_to_1e12():
+@pytest.mark.parametrize("model", [0, 1, 2])
+def test_c_twin_matches_numba_to_1e12(model):
     cfn = load()
     if cfn is None:
         pytest.skip("no C compiler")
@@ -33,7 +34,7 @@ def test_c_twin_matches_numba_to_1e12():
     for fn in (q4_forces_1pt, cfn):
         sig, f, ew = sig0.copy(), np.zeros_like(x), np.zeros(ne)
         bad = fn(x + du, du, conn, np.zeros(ne, np.int32), mat, sig, np.zeros((ne, 1, 0)), hg,
-                 0, ne, f, ew, np.zeros(ne), np.zeros((0, 3)))
+                 model, 0, ne, f, ew, np.zeros(ne), np.zeros((0, 3)))
         assert bad == -1
         out.append((sig, f, ew))
     for a, b in zip(*out, strict=True):
@@ -74,7 +75,7 @@ def _call_2x2(fn, x, du, conn, emat, mat, state):
     """One call on the state tuple (sig, mst, ewint, ewp) in place; returns (bad, f)."""
     sig, mst, ewint, ewp = state
     f = np.zeros_like(x)
-    bad = fn(x, du, conn, emat, mat, sig, mst, np.zeros((0, 6)), 0, conn.shape[0], f,
+    bad = fn(x, du, conn, emat, mat, sig, mst, np.zeros((0, 6)), 0, 0, conn.shape[0], f,
              ewint, ewp, np.zeros((0, 3)))
     return bad, f
 

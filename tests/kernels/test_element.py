@@ -5,7 +5,14 @@ import pytest
 
 from pdfem.kernels.elastic import elastic_energy_density, elastic_update
 from pdfem.kernels.element import q4_forces_2x2
-from pdfem.kernels.element_1pt import HG_COLS, hourglass_reference, q4_forces_1pt
+from pdfem.kernels.element_1pt import (
+    HG_BENDING,
+    HG_COEFFICIENT,
+    HG_COLS,
+    HG_FULL,
+    hourglass_reference,
+    q4_forces_1pt,
+)
 from pdfem.kernels.element_measures import q4_lumped_mass, q4_strain_energy
 from pdfem.kernels.params import BULK, CAP, ELASTIC, MODEL, NPAR, RHO, SHEAR
 from pdfem.kernels.stable import q4_stable_dt
@@ -43,21 +50,23 @@ def grid(nx, ny, jitter, seed, offset=(0.0, 0.0)):
     return x, conn
 
 
-def reference(xref, conn):
+def reference(xref, conn, coef=HGC):
     """The 1-point rule's hourglass reference of the configuration xref (pdfem.kernels)."""
     hg = np.zeros((conn.shape[0], HG_COLS))
-    hourglass_reference(xref, conn, HGC, 0, conn.shape[0], hg)
+    hourglass_reference(xref, conn, coef, 0, conn.shape[0], hg)
     return hg
 
 
 class State:
     """Per-element arrays of one run; the 1-point rule's hourglass reference is xref's (no
-    hourglass control without it)."""
+    hourglass control without it), its spring the coefficient's (HGC) or the bending one."""
 
-    def __init__(self, nn, ne, nip, xref=None, conn=None):
+    def __init__(self, nn, ne, nip, xref=None, conn=None, model=HG_COEFFICIENT):
         self.sig = np.zeros((ne, nip, 4))
         self.mstate = np.zeros((ne, nip, 0))
-        self.hg = (reference(xref, conn) if nip == 1 and xref is not None
+        self.model = model
+        coef = HGC if model == HG_COEFFICIENT else 1.0
+        self.hg = (reference(xref, conn, coef) if nip == 1 and xref is not None
                    else np.zeros((0, HG_COLS)))
         self.f = np.zeros((nn, 2))
         self.ewint = np.zeros(ne)
@@ -68,8 +77,8 @@ class State:
         e1 = conn.shape[0] if e1 is None else e1
         self.f[:] = 0.0
         emat = np.zeros(conn.shape[0], dtype=np.int32)
-        return fn(x, du, conn, emat, mat, self.sig, self.mstate, self.hg, e0, e1, self.f,
-                  self.ewint, self.ewp, np.zeros((0, 3)))
+        return fn(x, du, conn, emat, mat, self.sig, self.mstate, self.hg, self.model, e0, e1,
+                  self.f, self.ewint, self.ewp, np.zeros((0, 3)))
 
 
 def c_apply(deps):
@@ -159,28 +168,70 @@ def test_prestressed_rotation_90(rule):
                                rtol=0, atol=1e-6 * 2.0e6)
 
 
+def bending_modulus(k, g):
+    """E' of plane-strain bending from the continuum: a strain eps_xx with no shear and no
+    stress across (eps_yy chosen so that sigma_yy = 0, eps_zz = 0) stores E' eps_xx^2 / 2."""
+    lam = k - 2.0 * g / 3.0
+    exx = 1.0
+    eyy = -lam * exx / (lam + 2.0 * g)
+    return c_apply(np.array([exx, eyy, 0.0, 0.0])) @ np.array([exx, eyy, 0.0, 0.0])
+
+
+@pytest.mark.parametrize("model", [HG_COEFFICIENT, HG_BENDING, HG_FULL])
 @pytest.mark.parametrize("d", [1e-5, 0.3])
-def test_hourglass_mode_resisted(d):
+def test_hourglass_mode_resisted(d, model):
     """Unit square, du = d h in x, small or large: no strain, the force -k d gamma with
-    k = hg_coef (K + 4G/3) (B.B)/A and gamma = h/4, and the work k d^2 / 2, exactly."""
+    k = hg_coef (K + 4G/3) (B.B)/A, bending (2/3) E' (B.B)/A or full (2/3)(K + 7G/3) (B.B)/A,
+    and gamma = h/4, and the work k d^2 / 2, exactly."""
     x0 = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
     h = np.array([1.0, -1.0, 1.0, -1.0])
     du = np.zeros((4, 2))
     du[:, 0] = d * h
-    st = State(4, 1, 1, x0, conn)
+    st = State(4, 1, 1, x0, conn, model)
     assert st.step(q4_forces_1pt, x0 + du, du, conn, material()) == -1
     # Centroid strain vanishes; B.B / A = A b.b = 2 for the unit square; q = d (gamma.h = 1)
     assert np.max(np.abs(st.sig)) == 0.0
-    k = HGC * (K + 4.0 * G / 3.0) * 2.0
+    m = {HG_COEFFICIENT: HGC * (K + 4.0 * G / 3.0), HG_BENDING: 2.0 * bending_modulus(K, G) / 3.0,
+         HG_FULL: 2.0 * (K + 7.0 * G / 3.0) / 3.0}[model]
+    k = m * 2.0
     # q is a difference of the corners' positions: rounding at the element's size, 1
     np.testing.assert_allclose(st.f[:, 0], -k * d * h / 4.0, rtol=1e-14, atol=1e-15 * k)
     assert np.all(st.f[:, 1] == 0.0)
     np.testing.assert_allclose(st.ewint, [0.5 * k * d * d], rtol=1e-14, atol=1e-15 * k * d)
 
 
+@pytest.mark.parametrize("a,b", [(0.5, 0.5), (1.5, 0.5)])
+def test_full_stiffness_is_the_two_by_two_rules(a, b):
+    """A rectangle 2a x 2b moved in its hourglass modes, in x and in y, from zero stress: the
+    1-point rule's full stiffness stores in the two modes together what the 2 x 2 rule stores
+    (each mode alone for a square), and for the x mode of the rectangle the 2 x 2 rule's
+    closed form (4ab/3)(M/a^2 + G/b^2) d^2/2 (exact for a bilinear field)."""
+    x0 = np.array([[-a, -b], [a, -b], [a, b], [-a, b]])
+    conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
+    h = np.array([1.0, -1.0, 1.0, -1.0])
+    d = 1e-6
+    m = K + 4.0 * G / 3.0
+    work = {}
+    for rule, model in (("1pt", HG_FULL), ("2x2", HG_COEFFICIENT)):
+        fn, _, nip = RULES[rule]
+        for axis in (0, 1):
+            du = np.zeros((4, 2))
+            du[:, axis] = d * h
+            st = State(4, 1, nip, x0, conn, model)
+            assert st.step(fn, x0 + du, du, conn, material()) == -1
+            work[rule, axis] = st.ewint[0]
+    two = (4.0 * a * b / 3.0) * (m / a**2 + G / b**2) * d * d / 2.0
+    assert work["2x2", 0] == pytest.approx(two, rel=1e-9)
+    assert work["1pt", 0] + work["1pt", 1] == pytest.approx(work["2x2", 0] + work["2x2", 1],
+                                                            rel=1e-9)
+    if a == b:
+        assert work["1pt", 0] == pytest.approx(work["2x2", 0], rel=1e-9)
+
+
+@pytest.mark.parametrize("model", [HG_COEFFICIENT, HG_BENDING, HG_FULL])
 @pytest.mark.parametrize("eos", [False, True])
-def test_hourglass_force_is_the_gradient_of_its_energy(eos):
+def test_hourglass_force_is_the_gradient_of_its_energy(eos, model):
     """A jittered mesh drawn far from its reference (stretch, shear, rotation by 2 rad and a
     random non-affine part), compressed to 0.72 of its area: the kernel's hourglass forces
     equal minus the gradient of the stored hourglass energy by central differences, with a
@@ -192,7 +243,7 @@ def test_hourglass_force_is_the_gradient_of_its_energy(eos):
     ne = conn.shape[0]
     mat = material()
     mat[0, EOS_S] = 2.29 if eos else 0.0
-    st = State(xref.shape[0], ne, 1, xref, conn)
+    st = State(xref.shape[0], ne, 1, xref, conn, model)
     c, s = np.cos(2.0), np.sin(2.0)
     affine = xref @ (np.array([[c, -s], [s, c]]) @ np.array([[1.2, 0.4], [0.0, 0.6]])).T + 3.0
     x = affine + np.random.default_rng(12).normal(scale=0.05, size=xref.shape)
@@ -200,7 +251,8 @@ def test_hourglass_force_is_the_gradient_of_its_energy(eos):
 
     def energy(y):
         out = np.zeros(ne)
-        q4_strain_energy(y, conn, np.zeros(ne, np.int32), mat, zero, st.hg, 0, ne, out)
+        q4_strain_energy(y, conn, np.zeros(ne, np.int32), mat, zero, st.hg, model, 0, ne,
+                         out)
         return out.sum()
 
     # Zero stress and no increment: the kernel's force is the hourglass force alone
@@ -217,18 +269,19 @@ def test_hourglass_force_is_the_gradient_of_its_energy(eos):
     assert energy(affine) < 1e-20 * energy(x)
 
 
-@pytest.mark.parametrize("rule", ["1pt", "2x2"])
-def test_first_step_work_equals_stored_energy(rule):
+@pytest.mark.parametrize("rule,model", [("1pt", HG_COEFFICIENT), ("1pt", HG_BENDING),
+                                        ("1pt", HG_FULL), ("2x2", HG_COEFFICIENT)])
+def test_first_step_work_equals_stored_energy(rule, model):
     """From zero stress, one step: ewint = stored energy (elastic + hourglass) exactly."""
     fn, _, nip = RULES[rule]
     xref, conn = grid(2, 2, 0.2, seed=3)
     du = np.random.default_rng(4).uniform(-1e-4, 1e-4, size=xref.shape)
     x = xref + du
-    st = State(x.shape[0], conn.shape[0], nip, xref, conn)
+    st = State(x.shape[0], conn.shape[0], nip, xref, conn, model)
     assert st.step(fn, x, du, conn, material()) == -1
     out = np.zeros(conn.shape[0])
-    q4_strain_energy(x, conn, np.zeros(conn.shape[0], np.int32), material(), st.sig, st.hg, 0,
-                     conn.shape[0], out)
+    q4_strain_energy(x, conn, np.zeros(conn.shape[0], np.int32), material(), st.sig, st.hg,
+                     model, 0, conn.shape[0], out)
     np.testing.assert_allclose(st.ewint, out, rtol=1e-12)
     assert np.all(out > 0.0) and np.all(st.ewp == 0.0)
 
@@ -260,19 +313,20 @@ def test_lumped_mass_sums_to_rho_area():
     np.testing.assert_allclose(m, RHO0, rtol=1e-15)
 
 
-@pytest.mark.parametrize("rule", ["1pt", "2x2"])
-def test_numba_matches_numpy(rule):
+@pytest.mark.parametrize("rule,model", [("1pt", HG_COEFFICIENT), ("1pt", HG_BENDING),
+                                        ("2x2", HG_COEFFICIENT)])
+def test_numba_matches_numpy(rule, model):
     """Several random steps on a distorted mesh, subrange included: twins agree to 1e-12."""
     fn, ref, nip = RULES[rule]
     xref, conn = grid(4, 3, 0.2, seed=5)
     runs = []
     for kernel in (fn, ref):
         rng = np.random.default_rng(6)
-        st = State(xref.shape[0], conn.shape[0], nip, xref, conn)
+        st = State(xref.shape[0], conn.shape[0], nip, xref, conn, model)
         st.sig[:] = rng.normal(size=st.sig.shape) * 1e6
         if nip == 1:
             # The numpy twin's reference agrees with the kernel's
-            twin = numpy_hourglass_reference(xref, conn, HGC)
+            twin = numpy_hourglass_reference(xref, conn, HGC if model == HG_COEFFICIENT else 1.0)
             assert np.max(np.abs(twin - st.hg)) <= 1e-15 * np.max(np.abs(st.hg))
         x = xref.copy()
         for _ in range(4):
@@ -365,8 +419,8 @@ def test_one_point_kernel_is_the_material_point_under_uniform_strain():
         du = np.stack([np.zeros(x.shape[0]), ey * x[:, 1]], axis=1)
         x = x + du
         f = np.zeros_like(x)
-        assert q4_forces_1pt(x, du, conn, emat, mat, sig, mst, hg, 0, ne, f, ew, ewp,
-                             np.zeros((0, 3))) == -1
+        assert q4_forces_1pt(x, du, conn, emat, mat, sig, mst, hg, HG_COEFFICIENT, 0, ne, f,
+                             ew, ewp, np.zeros((0, 3))) == -1
         deps = np.array([0.0, ey / (1.0 + 0.5 * ey), 0.0, 0.0])
         for m, (s, st) in enumerate(point):
             status, _ = material_update(mat[m], s, deps, st)
@@ -389,6 +443,6 @@ def test_an_unknown_material_model_stops_the_one_point_kernel():
     mat = np.concatenate([material(), material(UNKNOWN_MODEL)])
     du = np.full_like(x, 1e-4)
     bad = q4_forces_1pt(x + du, du, conn, emat, mat, np.zeros((ne, 1, 4)), np.zeros((ne, 1, 0)),
-                        reference(x, conn), 0, ne, np.zeros_like(x), np.zeros(ne),
+                        reference(x, conn), HG_COEFFICIENT, 0, ne, np.zeros_like(x), np.zeros(ne),
                         np.zeros(ne), np.zeros((0, 3)))
     assert bad == 5

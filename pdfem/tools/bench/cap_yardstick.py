@@ -59,7 +59,7 @@ def cap_state(nx, ny, seed=1):
     dpre = squeeze(x, *PRELOAD_STRAIN)
     for _ in range(PRELOAD_CALLS):
         x = x + dpre
-        bad = q4_forces_2x2(x, dpre, conn, emat, mat, sig, mst, np.zeros((0, 6)), 0, ne,
+        bad = q4_forces_2x2(x, dpre, conn, emat, mat, sig, mst, np.zeros((0, 6)), 0, 0, ne,
                             np.zeros_like(x), np.zeros(ne), np.zeros(ne), np.zeros((0, 3)))
         if bad != -1:
             raise RuntimeError(f"element {bad} failed in the squeeze")
@@ -78,7 +78,7 @@ def _call(fn, s, work):
     ewint.fill(0.0)
     ewp.fill(0.0)
     t0 = time.perf_counter()
-    bad = fn(s["x"], s["du"], s["conn"], s["emat"], s["mat"], sig, mst, np.zeros((0, 6)), 0,
+    bad = fn(s["x"], s["du"], s["conn"], s["emat"], s["mat"], sig, mst, np.zeros((0, 6)), 0, 0,
              s["emat"].shape[0], f, ewint, ewp, np.zeros((0, 3)))
     t = time.perf_counter() - t0
     if bad != -1:

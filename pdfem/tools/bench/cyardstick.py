@@ -65,15 +65,15 @@ def _load_1pt(lib):
     fn = lib.q4_forces_1pt_elastic
     i64 = ctypes.c_int64
     ptr = ctypes.c_void_p
-    fn.argtypes = [ptr, ptr, ptr, ptr, ptr, i64, ptr, ptr, i64, i64, i64, ptr, ptr]
+    fn.argtypes = [ptr, ptr, ptr, ptr, ptr, i64, ptr, ptr, i64, i64, i64, i64, ptr, ptr]
     fn.restype = i64
 
-    def call(x, du, conn, emat, mat, sig, mst, hg, e0, e1, f, ewint, ewp, eth):
+    def call(x, du, conn, emat, mat, sig, mst, hg, hg_model, e0, e1, f, ewint, ewp, eth):
         _check((x, du, conn, emat, mat, sig, hg, f, ewint), ())
         assert conn.dtype == np.int64 and emat.dtype == np.int32
         return fn(x.ctypes.data, du.ctypes.data, conn.ctypes.data, emat.ctypes.data,
                   mat.ctypes.data, mat.shape[1], sig.ctypes.data, hg.ctypes.data, hg.shape[0],
-                  e0, e1, f.ctypes.data, ewint.ctypes.data)
+                  hg_model, e0, e1, f.ctypes.data, ewint.ctypes.data)
 
     return call
 
@@ -86,7 +86,7 @@ def _load_2x2_cap(lib):
     fn.argtypes = [ptr, ptr, ptr, ptr, ptr, i64, ptr, ptr, i64, i64, i64, ptr, ptr, ptr]
     fn.restype = i64
 
-    def call(x, du, conn, emat, mat, sig, mst, hg, e0, e1, f, ewint, ewp, eth):
+    def call(x, du, conn, emat, mat, sig, mst, hg, hg_model, e0, e1, f, ewint, ewp, eth):
         _check((x, du, conn, emat, mat, sig, mst, f, ewint, ewp),
                (x, du, mat, sig, mst, f, ewint, ewp))
         assert conn.dtype == np.int64 and emat.dtype == np.int32
@@ -136,8 +136,8 @@ def _load_contact_pass(lib):
 
 def load(name="q4_1pt"):
     """A callable running the C kernel ``name`` (see the module docstring), or None without
-    gcc: for the element kernels ``fn(x, du, conn, emat, mat, sig, mst, hg, e0, e1,
-    f, ewint, ewp, eth)``, for contact_pass the arguments of a step's pass (_load_contact_pass).
+    gcc: for the element kernels ``fn(x, du, conn, emat, mat, sig, mst, hg, hg_model, e0,
+    e1, f, ewint, ewp, eth)``, for contact_pass the arguments of a step's pass (_load_contact_pass).
     """
     makers = {"q4_1pt": _load_1pt, "q4_2x2_cap": _load_2x2_cap,
               "contact_pass": _load_contact_pass}

@@ -111,7 +111,7 @@ def c_yardstick(nx, ny, repeat):
         sig, ewint = np.zeros((ne, 1, 4)), np.zeros(ne)
         f = np.zeros_like(x)
         args = (x + du, du, conn, np.zeros(ne, np.int32), mat, sig, np.zeros((ne, 1, 0)), hg,
-                0, ne, f, ewint, np.zeros(ne), np.zeros((0, 3)))
+                0, 0, ne, f, ewint, np.zeros(ne), np.zeros((0, 3)))
         fn(*args)  # warm-up; also the state compared below (one call from zero)
         res = (sig.copy(), f.copy(), ewint.copy())
         times = []

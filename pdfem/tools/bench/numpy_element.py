@@ -127,8 +127,8 @@ def hourglass_reference(x, conn, hg_coef):
     return hg
 
 
-def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1, f, ewint, ewp,
-                     eth=None):
+def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, e1, f, ewint,
+                     ewp, eth=None):
     """numpy twin of q4_forces_1pt (elastic only); returns -1 or the first bad element."""
     am, _, _ = _bvec(x[conn[e0:e1]] - 0.5 * du[conn[e0:e1]])
     ac, _, _ = _bvec(x[conn[e0:e1]])
@@ -152,8 +152,10 @@ def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1, f, 
     fe[:, :, 1] = a[:, None] * (s[:, 2, None] * bx + s[:, 1, None] * by)
     if hg.shape[0] > 0:
         # The hourglass mode of the current and the last positions, its energy's change (a
-        # linear bulk: the spring's modulus K + 4G/3 does not change with the area)
-        g, k = hg[e0:stop, :4], hg[e0:stop, 4] * (kb + 4.0 * gs / 3.0)
+        # linear bulk: the spring's modulus does not change with the area)
+        m = {1: 8.0 * gs * (3.0 * kb + gs) / (3.0 * (3.0 * kb + 4.0 * gs)),
+             2: 2.0 * (kb + 7.0 * gs / 3.0) / 3.0}.get(hg_model, kb + 4.0 * gs / 3.0)
+        g, k = hg[e0:stop, :4], hg[e0:stop, 4] * m
         q0 = q1 = p0 = p1 = 0.0
         for i in range(1, 4):
             q0 = q0 + g[:, i] * (xc[:, i, 0] - xc[:, 0, 0])
@@ -169,8 +171,8 @@ def numpy_forces_1pt(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1, f, 
     return rc
 
 
-def numpy_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, e0, e1, f, ewint, ewp,
-                     eth=None):
+def numpy_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, e1, f, ewint,
+                     ewp, eth=None):
     """numpy twin of q4_forces_2x2 (elastic only); returns -1 or the first bad element."""
     xc = x[conn[e0:e1]]
     xm = xc - 0.5 * du[conn[e0:e1]]
@@ -233,7 +235,7 @@ def bench_elements(nx=200, ny=200, reps=5, rule="1pt"):
     kernels = {"1pt": (q4_forces_1pt, numpy_forces_1pt), "2x2": (q4_forces_2x2, numpy_forces_2x2)}
     for name, fn in zip(("numba", "numpy"), kernels[rule], strict=True):
         sig = np.zeros((ne, nip, 4))
-        args = (x + du, du, conn, emat, mat, sig, np.zeros((ne, nip, 0)), hg, 0, ne,
+        args = (x + du, du, conn, emat, mat, sig, np.zeros((ne, nip, 0)), hg, 0, 0, ne,
                 np.zeros_like(x), np.zeros(ne), np.zeros(ne), np.zeros((0, 3)))
         fn(*args)  # warm-up (numba compile / cache load)
         t0 = time.perf_counter()

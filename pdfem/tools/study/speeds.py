@@ -5,12 +5,13 @@ A rung is the packaged scene (``shot912_small.toml`` or ``shot912.toml``) with o
 changed, as a user would change it: the hammer block's velocity and its ``[[bc]]`` velocity set
 to V, and the scene's end, the piston's release and ramp-down and the output intervals scaled
 by 288 m/s / V, so that the front crosses the bed at every speed; ``[element]`` takes the
-rung's rule and level. Every rung runs on all ranks of the command (the same bits on any
-number); a rung that stops on a guard is a row with the guard's message and the study goes
-on. A row holds what the stability of a hard impact is judged by (to the end or not, the
-largest energy-balance error, the share of the grains' area in folded corners) and what its
-answer is checked with (Us, up, the piston's stress, rho1, the bound of the bed compacted to
-its grains' own compression at that stress, the anvil gauge's arrival, the final compaction).
+rung's rule and level and keeps the scene's other keys. Every rung runs on all ranks of the
+command (the same bits on any number); a rung that stops on a guard is a row with the guard's
+message and the study goes on. A row holds what the stability of a hard impact is judged by
+(to the end or not, the largest energy-balance error, the share of the grains' area in folded
+corners) and what its answer is checked with (Us, up, the piston's stress, rho1, the bound of
+the bed compacted to its grains' own compression at that stress, the anvil gauge's arrival,
+the final compaction).
 """
 
 import copy
@@ -48,7 +49,8 @@ def piston_doc(doc, speed, rule, level, mesh=None):
     for key in ("interval", "energy_interval", "gauge_interval"):
         if key in d.get("output", {}):
             d["output"][key] *= f
-    d["element"] = {"rule": rule, "level": level, **({"mesh": mesh} if mesh else {})}
+    d["element"] = {**d.get("element", {}), "rule": rule, "level": level,
+                    **({"mesh": mesh} if mesh else {})}
     return d
 
 

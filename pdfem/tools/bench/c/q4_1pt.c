@@ -2,7 +2,9 @@
  * algorithm, operation for operation (objective Hughes-Winget update with the Cayley rotation
  * of the mid-step spin, hypo-elastic increment, trapezoidal stress work, total-form stiffness
  * hourglass control from the reference hg[e] = (gamma_0..3, hg_coef A0 (b0.b0), A0); a linear
- * bulk, so the spring's modulus K + 4G/3 is constant), flat arrays in. Built by `pdfem bench elements` with
+ * bulk, so the spring's modulus is constant: K + 4G/3 for hg_model 0, the coefficient's,
+ * (8G/3)(3K + G)/(3K + 4G) for hg_model 1, the bending one, and (2/3)(K + 7G/3) for hg_model
+ * 2, the full one), flat arrays in. Built by `pdfem bench elements` with
  * gcc -O3 -march=native; used to measure how close the numba kernel comes to compiled C.
  * Returns -1, or the first element with a non-positive area. */
 #include <stdint.h>
@@ -25,8 +27,8 @@ static double bvec(const double xe[4][2], double bx[4], double by[4]) {
 
 int64_t q4_forces_1pt_elastic(const double *x, const double *du, const int64_t *conn,
                               const int32_t *emat, const double *mat, int64_t npar, double *sig,
-                              const double *hg, int64_t nhg, int64_t e0, int64_t e1, double *f,
-                              double *ewint) {
+                              const double *hg, int64_t nhg, int64_t hg_model, int64_t e0,
+                              int64_t e1, double *f, double *ewint) {
     double xc[4][2], xm[4][2], ue[4][2], fe[4][2], bx[4], by[4], deps[4], sold[4];
     for (int64_t e = e0; e < e1; e++) {
         const double *p = mat + (int64_t)emat[e] * npar;
@@ -77,8 +79,13 @@ int64_t q4_forces_1pt_elastic(const double *x, const double *du, const int64_t *
         /* Hourglass: the mode of the current and the last positions, energy change, forces */
         if (nhg > 0) {
             const double *g = hg + 6 * e;
-            double k = g[4] * (p[BULK] + 4.0 * p[SHEAR] / 3.0), q0 = 0.0, q1 = 0.0, p0 = 0.0,
-                   p1 = 0.0;
+            double m = p[BULK] + 4.0 * p[SHEAR] / 3.0;
+            if (hg_model == 1)
+                m = 8.0 * p[SHEAR] * (3.0 * p[BULK] + p[SHEAR])
+                    / (3.0 * (3.0 * p[BULK] + 4.0 * p[SHEAR]));
+            else if (hg_model == 2)
+                m = 2.0 * (p[BULK] + 7.0 * p[SHEAR] / 3.0) / 3.0;
+            double k = g[4] * m, q0 = 0.0, q1 = 0.0, p0 = 0.0, p1 = 0.0;
             for (int i = 1; i < 4; i++) {
                 q0 += g[i] * (xc[i][0] - xc[0][0]); q1 += g[i] * (xc[i][1] - xc[0][1]);
             }

@@ -64,6 +64,14 @@ class Thermoelastic(Effect):
     material_keys = ("expansion",)
 
 
+def nonlinear_bulk(materials):
+    """The name of the first material (a dict of name -> table, resolved or as written) whose
+    bulk is not linear (an equation of state), or None: such a material has no thermal pressure
+    for the thermo-elastic coupling (:class:`ThermalExpansion`)."""
+    return next((name for name, m in materials.items() if m.get("eos", "linear") != "linear"),
+                None)
+
+
 class ThermalExpansion(Effect):
     """Thermal strain alpha dT (isotropic, sigma_zz included) removed from the elastic strain."""
 
@@ -78,12 +86,13 @@ class ThermalExpansion(Effect):
         the thermo-elastic heat back into itself until the temperature runs away (measured:
         the small shot-912 bed's thermal variant at level 3). An equation of state needs its
         own thermal pressure (a Grueneisen term) for that."""
-        for name, m in resolved["materials"].items():
-            if m.get("eos", "linear") != "linear":
-                raise SceneError(f"materials.{name}.eos", f"\"{m['eos']}\" has no thermal "
-                                 "pressure: [thermal_expansion] and [thermoelastic] need "
-                                 "eos = \"linear\" (their 3 alpha K would grow with the "
-                                 "Hugoniot's bulk modulus and the heating run away)")
+        name = nonlinear_bulk(resolved["materials"])
+        if name is not None:
+            eos = resolved["materials"][name]["eos"]
+            raise SceneError(f"materials.{name}.eos", f"\"{eos}\" has no thermal pressure: "
+                             "[thermal_expansion] and [thermoelastic] need eos = \"linear\" "
+                             "(their 3 alpha K would grow with the Hugoniot's bulk modulus and "
+                             "the heating run away)")
 
     def setup(self, st, ctx):
         fill_column(st, ctx, ALPHA, "expansion")

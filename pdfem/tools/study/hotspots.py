@@ -21,6 +21,7 @@ import h5py
 import numpy as np
 
 from pdfem.effects.heat import MECHANISMS
+from pdfem.effects.thermal import nonlinear_bulk
 from pdfem.parallel.mpi import broadcast
 from pdfem.tools.study.accuracy import AccuracyStudy, Setting
 
@@ -49,7 +50,7 @@ def thermal_variant(doc):
         out[name] = {}
     # The thermo-elastic coupling needs every material's bulk linear (an equation of state
     # has no thermal pressure: pdfem.effects.thermal.ThermalExpansion)
-    if all(m.get("eos", "linear") == "linear" for m in out.get("materials", {}).values()):
+    if nonlinear_bulk(out.get("materials", {})) is None:
         out["thermoelastic"] = {}
         out["thermal_expansion"] = {}
     if "bulk_viscosity" in out:

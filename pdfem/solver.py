@@ -26,7 +26,15 @@ from pdfem.errors import SimulationError
 from pdfem.guards import Guards
 from pdfem.kernels.checks import first_nonfinite
 from pdfem.kernels.element import q4_forces_2x2
-from pdfem.kernels.element_1pt import HG_BENDING, HG_COEFFICIENT, HG_FULL, q4_forces_1pt
+from pdfem.kernels.element_1pt import (
+    HG_BENDING,
+    HG_COEFFICIENT,
+    HG_COLS,
+    HG_COLS_POINTS,
+    HG_FULL,
+    HG_POINTS,
+    q4_forces_1pt,
+)
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, moves_half_skin
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
@@ -72,11 +80,13 @@ class Simulation:
         self.element_kernel = q4_forces_1pt if el["rule"] == "1pt" else q4_forces_2x2
         # The 1-point rule's hourglass spring: its modulus and coefficient
         kind = el["hourglass_stiffness"]
-        self.hg_model = {"bending": HG_BENDING, "full": HG_FULL}.get(kind, HG_COEFFICIENT)
+        self.hg_model = {"bending": HG_BENDING, "full": HG_FULL,
+                         "points": HG_POINTS}.get(kind, HG_COEFFICIENT)
         self.hg_coef = 0.0
         if el["rule"] == "1pt":
             self.hg_coef = float(el["hourglass"]) if kind == "coefficient" else 1.0
-        self.fields = core_fields(self.nip, nst, NACC)
+        self.fields = core_fields(self.nip, nst, NACC,
+                                  HG_COLS_POINTS if self.hg_model == HG_POINTS else HG_COLS)
         for eff in self.effects:
             self.fields += [f for f in eff.extra_fields if f not in self.fields]
         self.halo_fields = ["x", "v"] + [n for e in self.effects for n in e.halo_fields]

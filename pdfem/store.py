@@ -30,10 +30,10 @@ class Field:
     dtype: type
 
 
-def core_fields(nip, nst, nacc):
-    """The fields every run has, and the 1-point rule's hourglass reference (hgref:
-    pdfem.kernels.element_1pt); effects add their own (temperature, ...)."""
-    hourglass = [Field("hgref", ELEM, (HG_COLS,), np.float64)] if nip == 1 else []
+def core_fields(nip, nst, nacc, hg_cols=HG_COLS):
+    """The fields every run has, and the 1-point rule's hourglass reference (hgref, hg_cols
+    columns: pdfem.kernels.element_1pt); effects add their own (temperature, ...)."""
+    hourglass = [Field("hgref", ELEM, (hg_cols,), np.float64)] if nip == 1 else []
     return [
         Field("gid", BODY, (), np.int64),
         Field("nn", BODY, (), np.int64),

@@ -24,7 +24,13 @@ pdfem.kernels.eos, with an equation of state) and G its shear modulus:
   of the rectangle cost k_x = (4/3) E' b/a and k_y = (4/3) E' a/b; their mean is the spring's
   k = (2/3) E' A (b.b) (A (b.b) = a/b + b/a), exact for a square and, for an elongated element,
   stiffer in its soft mode, as the 2 x 2 rule is. E' stays below 4G however stiff the bulk:
-  bending changes no volume.
+  bending changes no volume;
+- HG_FULL: M = (2/3)(K(eta) + 7G/3), hg_coef = 1: the stiffness the 2 x 2 rule gives the
+  mode (its mean over the two modes of a rectangle, as above);
+- HG_POINTS: not a spring but the energy of pdfem.kernels.hourglass_points, the 2 x 2 rule's
+  elastic energy of the element's departure from its mean deformation at every amplitude,
+  which grows without bound as a corner closes (hg then has HG_COLS_POINTS columns, the last
+  six the starting offsets of corners 1-3 from corner 0); its forces are its exact gradient.
 The spring stiffens with the element as the Flanagan-Belytschko spring does. The
 nodal forces are the gradient of E (internal, subtracted from f),
     f_Ia = k q_a gamma_I + (q.q / 2) dk/dA A b_Ia,   dk/dA = -hg_coef (b0.b0) dM/deta,
@@ -54,14 +60,18 @@ from pdfem.kernels.cap_surface import yield_value
 from pdfem.kernels.elastic import elastic_increment
 from pdfem.kernels.element import thermal_row
 from pdfem.kernels.eos import eos_row
+from pdfem.kernels.hourglass_points import points_energy
 from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_S, MODEL, SHEAR
 
-# Columns of an element's hourglass reference: gamma_0..3, hg_coef A0 (b0.b0), A0
+# Columns of an element's hourglass reference: gamma_0..3, hg_coef A0 (b0.b0), A0; with the
+# points stiffness also the starting offsets of corners 1-3 from corner 0 (x1, y1, x2, y2, x3, y3)
 HG_COLS = 6
+HG_COLS_POINTS = 12
 # The hourglass spring's modulus (module docstring): the coefficient's or the bending one
 HG_COEFFICIENT = 0
 HG_BENDING = 1
 HG_FULL = 2
+HG_POINTS = 3
 
 
 @njit(cache=True)
@@ -142,9 +152,12 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
     """
     if sig.shape[1] != 1:
         raise ValueError("q4_forces_1pt needs sig of shape (ne, 1, 4)")
+    if hg_model == HG_POINTS and hg.shape[0] > 0 and hg.shape[1] < HG_COLS_POINTS:
+        raise ValueError("the points hourglass stiffness needs hg of shape (ne, 12)")
     has_hg = hg.shape[0] > 0
     pbuf = np.empty(mat_params.shape[1])
     ebuf = np.empty(mat_params.shape[1])
+    hbuf = np.empty(8)
     for e in range(e0, e1):
         # The material's own row (the hourglass spring's) and the step's (softened, EOS)
         row = mat_params[emat[e]]
@@ -241,7 +254,29 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
         fx2, fy2 = a * (t0 * bx2 + t2 * by2), a * (t2 * bx2 + t1 * by2)
         fx3, fy3 = a * (t0 * bx3 + t2 * by3), a * (t2 * bx3 + t1 * by3)
         # Hourglass: the mode q of the current positions, its energy's change, its forces
-        if has_hg:
+        if has_hg and hg_model == HG_POINTS:
+            a0 = hg[e, 5]
+            k, dk = _tangent_bulk(row, 1.0 - a / a0)
+            ko, _ = _tangent_bulk(row, 1.0 - _area(x0 - u0, y0 - v0, x1 - u1, y1 - v1, x2 - u2,
+                                                   y2 - v2, x3 - u3, y3 - v3) / a0)
+            mu = row[SHEAR]
+            eo, _, ok = points_energy(hg[e, 6], hg[e, 7], hg[e, 8], hg[e, 9], hg[e, 10],
+                                      hg[e, 11], (x1 - u1) - (x0 - u0), (y1 - v1) - (y0 - v0),
+                                      (x2 - u2) - (x0 - u0), (y2 - v2) - (y0 - v0),
+                                      (x3 - u3) - (x0 - u0), (y3 - v3) - (y0 - v0),
+                                      ko - 2.0 * mu / 3.0, mu, hbuf)
+            en, s2, ok2 = points_energy(hg[e, 6], hg[e, 7], hg[e, 8], hg[e, 9], hg[e, 10],
+                                        hg[e, 11], x1 - x0, y1 - y0, x2 - x0, y2 - y0,
+                                        x3 - x0, y3 - y0, k - 2.0 * mu / 3.0, mu, hbuf)
+            if not (ok and ok2):
+                return e
+            ewint[e] += en - eo
+            c = -s2 * dk * a / a0
+            fx0, fy0 = fx0 + hbuf[0] + c * bx0, fy0 + hbuf[1] + c * by0
+            fx1, fy1 = fx1 + hbuf[2] + c * bx1, fy1 + hbuf[3] + c * by1
+            fx2, fy2 = fx2 + hbuf[4] + c * bx2, fy2 + hbuf[5] + c * by2
+            fx3, fy3 = fx3 + hbuf[6] + c * bx3, fy3 + hbuf[7] + c * by3
+        elif has_hg:
             g0, g1, g2, g3, kr, a0 = hg[e, 0], hg[e, 1], hg[e, 2], hg[e, 3], hg[e, 4], hg[e, 5]
             q0 = g1 * (x1 - x0) + g2 * (x2 - x0) + g3 * (x3 - x0)
             q1 = g1 * (y1 - y0) + g2 * (y2 - y0) + g3 * (y3 - y0)
@@ -300,3 +335,6 @@ def hourglass_reference(x, conn, hg_coef, e0, e1, hg):
               + bx3 * bx3 + by3 * by3)
         hg[e, 4] = hg_coef * max(a, 0.0) * bb
         hg[e, 5] = a
+        if hg.shape[1] >= HG_COLS_POINTS:
+            hg[e, 6], hg[e, 7], hg[e, 8], hg[e, 9] = x1 - x0, y1 - y0, x2 - x0, y2 - y0
+            hg[e, 10], hg[e, 11] = x3 - x0, y3 - y0

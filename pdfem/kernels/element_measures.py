@@ -9,8 +9,9 @@ from numba import njit
 
 from pdfem.kernels.elastic import elastic_energy_density
 from pdfem.kernels.element import ETA, GP, XI, _bvec, _ip_grad
-from pdfem.kernels.element_1pt import hourglass_modulus
-from pdfem.kernels.params import RHO
+from pdfem.kernels.element_1pt import HG_POINTS, _tangent_bulk, hourglass_modulus
+from pdfem.kernels.hourglass_points import points_energy
+from pdfem.kernels.params import RHO, SHEAR
 
 
 @njit(cache=True)
@@ -61,7 +62,16 @@ def q4_strain_energy(x, conn, emat, mat_params, sig, hg, hg_model, e0, e1, out):
             # Centroid rule plus the hourglass spring energy
             a = _bvec(xc, dx, dy)
             en = elastic_energy_density(p, sig[e, 0]) * a
-            if hg.shape[0] > 0:
+            if hg.shape[0] > 0 and hg_model == HG_POINTS:
+                k, _ = _tangent_bulk(p, 1.0 - a / hg[e, 5])
+                hb = np.empty(8)
+                eh, _, _ = points_energy(hg[e, 6], hg[e, 7], hg[e, 8], hg[e, 9], hg[e, 10],
+                                         hg[e, 11], xc[1, 0] - xc[0, 0], xc[1, 1] - xc[0, 1],
+                                         xc[2, 0] - xc[0, 0], xc[2, 1] - xc[0, 1],
+                                         xc[3, 0] - xc[0, 0], xc[3, 1] - xc[0, 1],
+                                         k - 2.0 * p[SHEAR] / 3.0, p[SHEAR], hb)
+                en += eh
+            elif hg.shape[0] > 0:
                 q0, q1 = 0.0, 0.0
                 for i in range(1, 4):
                     q0 += hg[e, i] * (xc[i, 0] - xc[0, 0])

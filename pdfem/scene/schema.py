@@ -53,8 +53,10 @@ ELEMENT = {
                                "hourglass mode measured from the configuration the run starts "
                                "from: hourglass x (K + 4G/3), the element's plane-strain bending "
                                "stiffness (2/3) E', or the 2x2 rule's (2/3)(K + 7G/3), times the "
-                               "element's geometric factor A0 (b0.b0)",
-                               choices=("coefficient", "bending", "full")),
+                               "element's geometric factor A0 (b0.b0); or points: the 2x2 "
+                               "rule's elastic energy of the element's departure from its mean "
+                               "strain at every amplitude",
+                               choices=("coefficient", "bending", "full", "points")),
     "hourglass": Key("float", Derived('0.05 with hourglass_stiffness = "coefficient"'),
                      "hourglass stiffness coefficient (rule 1pt, hourglass_stiffness = "
                      '"coefficient" only)', lo=0.0, hi=0.5),

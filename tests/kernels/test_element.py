@@ -9,7 +9,9 @@ from pdfem.kernels.element_1pt import (
     HG_BENDING,
     HG_COEFFICIENT,
     HG_COLS,
+    HG_COLS_POINTS,
     HG_FULL,
+    HG_POINTS,
     hourglass_reference,
     q4_forces_1pt,
 )
@@ -50,9 +52,9 @@ def grid(nx, ny, jitter, seed, offset=(0.0, 0.0)):
     return x, conn
 
 
-def reference(xref, conn, coef=HGC):
+def reference(xref, conn, coef=HGC, cols=HG_COLS):
     """The 1-point rule's hourglass reference of the configuration xref (pdfem.kernels)."""
-    hg = np.zeros((conn.shape[0], HG_COLS))
+    hg = np.zeros((conn.shape[0], cols))
     hourglass_reference(xref, conn, coef, 0, conn.shape[0], hg)
     return hg
 
@@ -66,7 +68,8 @@ class State:
         self.mstate = np.zeros((ne, nip, 0))
         self.model = model
         coef = HGC if model == HG_COEFFICIENT else 1.0
-        self.hg = (reference(xref, conn, coef) if nip == 1 and xref is not None
+        cols = HG_COLS_POINTS if model == HG_POINTS else HG_COLS
+        self.hg = (reference(xref, conn, coef, cols) if nip == 1 and xref is not None
                    else np.zeros((0, HG_COLS)))
         self.f = np.zeros((nn, 2))
         self.ewint = np.zeros(ne)
@@ -202,6 +205,54 @@ def test_hourglass_mode_resisted(d, model):
 
 
 @pytest.mark.parametrize("a,b", [(0.5, 0.5), (1.5, 0.5)])
+def test_points_stiffness_is_the_two_by_two_rules_per_mode(a, b):
+    """The points stiffness stores in each hourglass mode of a rectangle what the 2 x 2 rule
+    stores, to the first order in the mode's size (here 1e-6 of the element)."""
+    x0 = np.array([[-a, -b], [a, -b], [a, b], [-a, b]])
+    conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
+    h = np.array([1.0, -1.0, 1.0, -1.0])
+    for axis in (0, 1):
+        du = np.zeros((4, 2))
+        du[:, axis] = 1e-6 * h
+        work = []
+        for rule, model in (("1pt", HG_POINTS), ("2x2", HG_COEFFICIENT)):
+            fn, _, nip = RULES[rule]
+            st = State(4, 1, nip, x0, conn, model)
+            assert st.step(fn, x0 + du, du, conn, material()) == -1
+            work.append(st.ewint[0])
+        assert work[0] == pytest.approx(work[1], rel=1e-4)
+
+
+def test_points_stiffness_stops_a_closing_corner():
+    """A square whose corner 2 is pushed towards corner 0 along the diagonal, past the point
+    where the element stops being convex (0.5): the points energy grows ever faster as the
+    nearest point's Jacobian falls to zero (the coefficient spring's as the square of the
+    push), and the kernel stops on the element once a point turns over."""
+    x0 = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    conn = np.array([[0, 1, 2, 3]], dtype=np.int64)
+    energies = {}
+    for model in (HG_POINTS, HG_COEFFICIENT):
+        st = State(4, 1, 1, x0, conn, model)
+        out = []
+        for s in (0.3, 0.5, 0.6):
+            x = x0.copy()
+            x[2] -= s
+            e = np.zeros(1)
+            q4_strain_energy(x, conn, np.zeros(1, np.int32), material(), np.zeros((1, 1, 4)),
+                             st.hg, model, 0, 1, e)
+            out.append(e[0])
+        energies[model] = out
+    pts, spring = energies[HG_POINTS], energies[HG_COEFFICIENT]
+    assert all(b > a for a, b in zip(pts, pts[1:], strict=False))
+    assert pts[-1] / pts[-2] > 2.0 * spring[-1] / spring[-2]
+    # Past the turn-over of the point next to corner 2 the kernel stops on the element
+    st = State(4, 1, 1, x0, conn, HG_POINTS)
+    x = x0.copy()
+    x[2] -= 0.7
+    assert st.step(q4_forces_1pt, x, np.zeros_like(x), conn, material()) == 0
+
+
+@pytest.mark.parametrize("a,b", [(0.5, 0.5), (1.5, 0.5)])
 def test_full_stiffness_is_the_two_by_two_rules(a, b):
     """A rectangle 2a x 2b moved in its hourglass modes, in x and in y, from zero stress: the
     1-point rule's full stiffness stores in the two modes together what the 2 x 2 rule stores
@@ -229,7 +280,7 @@ def test_full_stiffness_is_the_two_by_two_rules(a, b):
         assert work["1pt", 0] == pytest.approx(work["2x2", 0], rel=1e-9)
 
 
-@pytest.mark.parametrize("model", [HG_COEFFICIENT, HG_BENDING, HG_FULL])
+@pytest.mark.parametrize("model", [HG_COEFFICIENT, HG_BENDING, HG_FULL, HG_POINTS])
 @pytest.mark.parametrize("eos", [False, True])
 def test_hourglass_force_is_the_gradient_of_its_energy(eos, model):
     """A jittered mesh drawn far from its reference (stretch, shear, rotation by 2 rad and a
@@ -266,11 +317,13 @@ def test_hourglass_force_is_the_gradient_of_its_energy(eos, model):
             e[i, k] = 1e-6
             grad[i, k] = (energy(x + e) - energy(x - e)) / 2e-6
     np.testing.assert_allclose(st.f, -grad, rtol=0, atol=1e-6 * np.abs(grad).max())
-    assert energy(affine) < 1e-20 * energy(x)
+    # The points energy of an affine map: H = I to rounding, Psi of order mu eps^2
+    assert energy(affine) < (1e-14 if model == HG_POINTS else 1e-20) * energy(x)
 
 
 @pytest.mark.parametrize("rule,model", [("1pt", HG_COEFFICIENT), ("1pt", HG_BENDING),
-                                        ("1pt", HG_FULL), ("2x2", HG_COEFFICIENT)])
+                                        ("1pt", HG_FULL), ("1pt", HG_POINTS),
+                                        ("2x2", HG_COEFFICIENT)])
 def test_first_step_work_equals_stored_energy(rule, model):
     """From zero stress, one step: ewint = stored energy (elastic + hourglass) exactly."""
     fn, _, nip = RULES[rule]

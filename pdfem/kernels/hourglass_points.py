@@ -1,0 +1,126 @@
+"""The 1-point rule's hourglass energy taken at the 2 x 2 Gauss points (the ``points`` stiffness
+of pdfem.kernels.element_1pt): the deviation of each point's deformation from the centroid's,
+stored as a hyperelastic energy. Plane strain, thickness 1 m; energies in J/m, tension positive.
+
+With the starting corners X_I (their offsets from corner 0, which are all the energy needs), the
+starting mean gradients b0_I and, at each Gauss point g (xi, eta = +-1/sqrt(3)), the starting
+gradients grad_X N_I(g) and weight w_g = det J0(g) (the point's share of the starting area),
+    F_c = sum_I x_I (x) b0_I,  F_g = sum_I x_I (x) grad_X N_I(g),  H_g = F_g F_c^-1,
+    E = sum_g w_g Psi(H_g),  Psi(H) = mu/2 (H:H - 2 - 2 ln J) + lam/2 (ln J)^2,  J = det H.
+H_g is the identity for every affine map of the starting element (rigid motion included), and
+Psi is isotropic, so E is objective and zero unless the element leaves its starting shape. For
+small deviations Psi is the linear-elastic energy with lam = K - 2G/3 and mu = G, and since the
+weighted point gradients sum to the mean one (sum_g w_g grad_X N_I(g) = A0 b0_I), E is then the
+2 x 2 rule's elastic energy of the element less that of its mean strain. Unlike a spring in the
+hourglass mode, it grows without bound as a point's J falls to zero: a corner that closes costs
+ever more energy. The gradient of E is exact:
+    dE/dx_I = sum_g w_g [(P F_c^-T) grad_X N_I(g) - (H^T P F_c^-T) b0_I],
+    P = dPsi/dH = mu (H - H^-T) + lam ln J H^-T.
+"""
+
+import math
+
+from numba import njit
+
+GP = 1.0 / math.sqrt(3.0)
+
+
+@njit(cache=True)
+def _start_mean_gradients(rx, ry):
+    """The starting mean gradients (b0x, b0y) of the corners (offsets rx, ry from corner 0)."""
+    a0 = 0.5 * ((rx[2] - rx[0]) * (ry[3] - ry[1]) - (rx[3] - rx[1]) * (ry[2] - ry[0]))
+    rr = 1.0 / (2.0 * a0)
+    b0x = ((ry[1] - ry[3]) * rr, (ry[2] - ry[0]) * rr, (ry[3] - ry[1]) * rr, (ry[0] - ry[2]) * rr)
+    b0y = ((rx[3] - rx[1]) * rr, (rx[0] - rx[2]) * rr, (rx[1] - rx[3]) * rr, (rx[2] - rx[0]) * rr)
+    return b0x, b0y
+
+
+@njit(cache=True)
+def _start_point(rx, ry, xi, et):
+    """Weight det J0 and starting gradients (gx, gy) of the corners at the point (xi, et)."""
+    dnx = (-0.25 * (1 - et), 0.25 * (1 - et), 0.25 * (1 + et), -0.25 * (1 + et))
+    dne = (-0.25 * (1 - xi), -0.25 * (1 + xi), 0.25 * (1 + xi), 0.25 * (1 - xi))
+    j11 = j12 = j21 = j22 = 0.0
+    for i in range(4):
+        j11 += rx[i] * dnx[i]
+        j12 += rx[i] * dne[i]
+        j21 += ry[i] * dnx[i]
+        j22 += ry[i] * dne[i]
+    w = j11 * j22 - j12 * j21
+    gx = ((j22 * dnx[0] - j21 * dne[0]) / w, (j22 * dnx[1] - j21 * dne[1]) / w,
+          (j22 * dnx[2] - j21 * dne[2]) / w, (j22 * dnx[3] - j21 * dne[3]) / w)
+    gy = ((j11 * dne[0] - j12 * dnx[0]) / w, (j11 * dne[1] - j12 * dnx[1]) / w,
+          (j11 * dne[2] - j12 * dnx[2]) / w, (j11 * dne[3] - j12 * dnx[3]) / w)
+    return w, gx, gy
+
+
+@njit(cache=True)
+def points_energy(r1x, r1y, r2x, r2y, r3x, r3y, c1x, c1y, c2x, c2y, c3x, c3y, lam, mu, out):
+    """(E, S2, ok) of one element (module docstring) from the starting offsets r_I = X_I - X_0
+    and the current offsets c_I = x_I - x_0 of corners 1-3, with the moduli lam and mu;
+    out[2I], out[2I+1] = dE/dx_I for the corners 0-3 (they add up to zero). S2 = dE/dlam =
+    sum_g w_g (ln J_g)^2 / 2. ok is False (E, S2 and out unset) when F_c or a point's H is not
+    positive."""
+    rx = (0.0, r1x, r2x, r3x)
+    ry = (0.0, r1y, r2y, r3y)
+    cx = (0.0, c1x, c2x, c3x)
+    cy = (0.0, c1y, c2y, c3y)
+    xi_n = (-1.0, 1.0, 1.0, -1.0)
+    et_n = (-1.0, -1.0, 1.0, 1.0)
+    # Starting mean gradients b0
+    b0x, b0y = _start_mean_gradients(rx, ry)
+    # F_c and its inverse
+    f11 = f12 = f21 = f22 = 0.0
+    for i in range(4):
+        f11 += cx[i] * b0x[i]
+        f12 += cx[i] * b0y[i]
+        f21 += cy[i] * b0x[i]
+        f22 += cy[i] * b0y[i]
+    dc = f11 * f22 - f12 * f21
+    if not dc > 0.0:
+        return 0.0, 0.0, False
+    i11, i12, i21, i22 = f22 / dc, -f12 / dc, -f21 / dc, f11 / dc
+    for k in range(8):
+        out[k] = 0.0
+    e = 0.0
+    s2 = 0.0
+    for gp in range(4):
+        # The point's starting weight and gradients
+        w, gx, gy = _start_point(rx, ry, GP * xi_n[gp], GP * et_n[gp])
+        g11 = g12 = g21 = g22 = 0.0
+        for i in range(4):
+            g11 += cx[i] * gx[i]
+            g12 += cx[i] * gy[i]
+            g21 += cy[i] * gx[i]
+            g22 += cy[i] * gy[i]
+        # F_g and H = F_g F_c^-1; the point's energy and S2
+        h11 = g11 * i11 + g12 * i21
+        h12 = g11 * i12 + g12 * i22
+        h21 = g21 * i11 + g22 * i21
+        h22 = g21 * i12 + g22 * i22
+        jj = h11 * h22 - h12 * h21
+        if not jj > 0.0:
+            return 0.0, 0.0, False
+        lj = math.log(jj)
+        e += w * (0.5 * mu * (h11 * h11 + h12 * h12 + h21 * h21 + h22 * h22 - 2.0 - 2.0 * lj)
+                  + 0.5 * lam * lj * lj)
+        s2 += w * 0.5 * lj * lj
+        # P = mu (H - H^-T) + lam ln J H^-T, H^-T = [[h22, -h21], [-h12, h11]] / J
+        t11, t12, t21, t22 = h22 / jj, -h21 / jj, -h12 / jj, h11 / jj
+        p11 = mu * (h11 - t11) + lam * lj * t11
+        p12 = mu * (h12 - t12) + lam * lj * t12
+        p21 = mu * (h21 - t21) + lam * lj * t21
+        p22 = mu * (h22 - t22) + lam * lj * t22
+        # The gradient: A = P F_c^-T on grad_X N_I(g), C = H^T A on b0_I
+        a11 = p11 * i11 + p12 * i12
+        a12 = p11 * i21 + p12 * i22
+        a21 = p21 * i11 + p22 * i12
+        a22 = p21 * i21 + p22 * i22
+        c11 = h11 * a11 + h21 * a21
+        c12 = h11 * a12 + h21 * a22
+        c21 = h12 * a11 + h22 * a21
+        c22 = h12 * a12 + h22 * a22
+        for i in range(4):
+            out[2 * i] += w * (a11 * gx[i] + a12 * gy[i] - (c11 * b0x[i] + c12 * b0y[i]))
+            out[2 * i + 1] += w * (a21 * gx[i] + a22 * gy[i] - (c21 * b0x[i] + c22 * b0y[i]))
+    return e, s2, True

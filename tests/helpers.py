@@ -6,6 +6,7 @@ import sys
 from pathlib import Path
 
 import h5py
+import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 MPIRUN = ["bash", str(ROOT / "jobs" / "mpirun.sh")]
@@ -20,6 +21,20 @@ def pdfem(args, cwd, ranks=None, timeout=300, env=None):
     env = dict(os.environ, PYTHONPATH=str(ROOT), **(env or {}))
     return subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=timeout,
                           env=env)
+
+
+def same_bits_on_one_and_two_ranks(scene, cwd):
+    """Run the scene file ``scene`` (in ``cwd``) on 1 and on 2 ranks, to one.h5 and two.h5;
+    assert that both end well with every dataset identical; return the datasets."""
+    one = pdfem(["run", scene, "-o", "one.h5", "--quiet"], cwd)
+    assert one.returncode == 0, one.stderr
+    two = pdfem(["run", scene, "-o", "two.h5", "--quiet"], cwd, ranks=2)
+    assert two.returncode == 0, two.stderr
+    a, b = datasets(Path(cwd) / "one.h5"), datasets(Path(cwd) / "two.h5")
+    assert a.keys() == b.keys()
+    for k in a:
+        assert np.array_equal(a[k], b[k]), k
+    return a
 
 
 def datasets(path):

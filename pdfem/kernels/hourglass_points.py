@@ -26,6 +26,18 @@ GP = 1.0 / math.sqrt(3.0)
 
 
 @njit(cache=True)
+def _outer(ax, ay, bx, by):
+    """The 2 x 2 tensor sum_I a_I (x) b_I, row by row (11, 12, 21, 22)."""
+    s11 = s12 = s21 = s22 = 0.0
+    for i in range(4):
+        s11 += ax[i] * bx[i]
+        s12 += ax[i] * by[i]
+        s21 += ay[i] * bx[i]
+        s22 += ay[i] * by[i]
+    return s11, s12, s21, s22
+
+
+@njit(cache=True)
 def _start_mean_gradients(rx, ry):
     """The starting mean gradients (b0x, b0y) of the corners (offsets rx, ry from corner 0)."""
     a0 = 0.5 * ((rx[2] - rx[0]) * (ry[3] - ry[1]) - (rx[3] - rx[1]) * (ry[2] - ry[0]))
@@ -40,12 +52,7 @@ def _start_point(rx, ry, xi, et):
     """Weight det J0 and starting gradients (gx, gy) of the corners at the point (xi, et)."""
     dnx = (-0.25 * (1 - et), 0.25 * (1 - et), 0.25 * (1 + et), -0.25 * (1 + et))
     dne = (-0.25 * (1 - xi), -0.25 * (1 + xi), 0.25 * (1 + xi), 0.25 * (1 - xi))
-    j11 = j12 = j21 = j22 = 0.0
-    for i in range(4):
-        j11 += rx[i] * dnx[i]
-        j12 += rx[i] * dne[i]
-        j21 += ry[i] * dnx[i]
-        j22 += ry[i] * dne[i]
+    j11, j12, j21, j22 = _outer(rx, ry, dnx, dne)
     w = j11 * j22 - j12 * j21
     gx = ((j22 * dnx[0] - j21 * dne[0]) / w, (j22 * dnx[1] - j21 * dne[1]) / w,
           (j22 * dnx[2] - j21 * dne[2]) / w, (j22 * dnx[3] - j21 * dne[3]) / w)
@@ -70,12 +77,7 @@ def points_energy(r1x, r1y, r2x, r2y, r3x, r3y, c1x, c1y, c2x, c2y, c3x, c3y, la
     # Starting mean gradients b0
     b0x, b0y = _start_mean_gradients(rx, ry)
     # F_c and its inverse
-    f11 = f12 = f21 = f22 = 0.0
-    for i in range(4):
-        f11 += cx[i] * b0x[i]
-        f12 += cx[i] * b0y[i]
-        f21 += cy[i] * b0x[i]
-        f22 += cy[i] * b0y[i]
+    f11, f12, f21, f22 = _outer(cx, cy, b0x, b0y)
     dc = f11 * f22 - f12 * f21
     if not dc > 0.0:
         return 0.0, 0.0, False
@@ -87,13 +89,8 @@ def points_energy(r1x, r1y, r2x, r2y, r3x, r3y, c1x, c1y, c2x, c2y, c3x, c3y, la
     for gp in range(4):
         # The point's starting weight and gradients
         w, gx, gy = _start_point(rx, ry, GP * xi_n[gp], GP * et_n[gp])
-        g11 = g12 = g21 = g22 = 0.0
-        for i in range(4):
-            g11 += cx[i] * gx[i]
-            g12 += cx[i] * gy[i]
-            g21 += cy[i] * gx[i]
-            g22 += cy[i] * gy[i]
         # F_g and H = F_g F_c^-1; the point's energy and S2
+        g11, g12, g21, g22 = _outer(cx, cy, gx, gy)
         h11 = g11 * i11 + g12 * i21
         h12 = g11 * i12 + g12 * i22
         h21 = g21 * i11 + g22 * i21

@@ -1,11 +1,12 @@
 """The 1-point rule with the points hourglass stiffness through the command line: the small
-shot-912 piston at 1500 m/s on level-2 kite meshes, the packaged scene's crystal on its Hugoniot:
-fewer than 1 % of the grains' elements with a folded corner, the balance closed, the same bits on 1 and 2 ranks."""
+shot-912 piston at 1500 m/s on level-2 kite meshes, the packaged scene's crystal on its
+Hugoniot: fewer than 1 % of the grains' elements with a folded corner, the balance closed, the
+same bits on 1 and 2 ranks."""
 
 import numpy as np
 
 from pdfem.mesh.quality import corner_jacobians
-from tests.helpers import datasets, pdfem
+from tests.helpers import same_bits_on_one_and_two_ranks
 from tests.scenes import packaged, write_scene
 
 
@@ -25,14 +26,7 @@ def _piston(out):
 
 def test_points_stiffness_run_same_bits_on_one_and_two_ranks(tmp_path):
     write_scene(tmp_path / "s.toml", _piston("r.h5"))
-    one = pdfem(["run", "s.toml", "-o", "one.h5", "--quiet"], tmp_path)
-    assert one.returncode == 0, one.stderr
-    two = pdfem(["run", "s.toml", "-o", "two.h5", "--quiet"], tmp_path, ranks=2)
-    assert two.returncode == 0, two.stderr
-    a, b = datasets(tmp_path / "one.h5"), datasets(tmp_path / "two.h5")
-    assert a.keys() == b.keys()
-    for k in a:
-        assert np.array_equal(a[k], b[k]), k
+    a = same_bits_on_one_and_two_ranks("s.toml", tmp_path)
     assert np.abs(a["energy/balance_error"]).max() < 0.01
     grains = np.nonzero(a["mesh/body_kind"] == 0)[0]
     conn = a["mesh/conn"][np.isin(a["mesh/elem_body"], grains)]

@@ -4,7 +4,7 @@ element inside another, runs on, with the same bits on 1 and 2 ranks."""
 
 import numpy as np
 
-from tests.helpers import datasets, pdfem
+from tests.helpers import datasets, pdfem, same_bits_on_one_and_two_ranks
 from tests.scenes import collision, packaged, write_scene
 
 
@@ -47,12 +47,5 @@ def test_piston_1500_past_the_area_laws_stop(tmp_path):
     assert p.returncode != 0 and "inside" in p.stderr, p.stderr
     # The potential law goes past it, on 1 and on 2 ranks with the same bits
     write_scene(tmp_path / "pot.toml", _piston("pot.h5", "potential", 1.3e-7))
-    one = pdfem(["run", "pot.toml", "-o", "one.h5", "--quiet"], tmp_path)
-    assert one.returncode == 0, one.stderr
-    two = pdfem(["run", "pot.toml", "-o", "two.h5", "--quiet"], tmp_path, ranks=2)
-    assert two.returncode == 0, two.stderr
-    a, b = datasets(tmp_path / "one.h5"), datasets(tmp_path / "two.h5")
-    assert a.keys() == b.keys()
-    for k in a:
-        assert np.array_equal(a[k], b[k]), k
+    a = same_bits_on_one_and_two_ranks("pot.toml", tmp_path)
     assert np.abs(a["energy/balance_error"]).max() < 0.01

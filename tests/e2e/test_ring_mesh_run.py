@@ -6,7 +6,7 @@ for rings is refused with one line."""
 import numpy as np
 
 from pdfem.mesh.quality import corner_jacobians
-from tests.helpers import datasets, pdfem
+from tests.helpers import datasets, pdfem, same_bits_on_one_and_two_ranks
 from tests.scenes import packaged, small_prepare, write_scene
 
 
@@ -53,14 +53,7 @@ def test_ring_mesh_folds_later_than_kites(tmp_path):
 
 def test_fast_ring_run_with_eos_same_bits_on_one_and_two_ranks(tmp_path):
     write_scene(tmp_path / "s.toml", _fast("r.h5", "ring", eos=True))
-    one = pdfem(["run", "s.toml", "-o", "one.h5", "--quiet"], tmp_path)
-    assert one.returncode == 0, one.stderr
-    two = pdfem(["run", "s.toml", "-o", "two.h5", "--quiet"], tmp_path, ranks=2)
-    assert two.returncode == 0, two.stderr
-    a, b = datasets(tmp_path / "one.h5"), datasets(tmp_path / "two.h5")
-    assert a.keys() == b.keys()
-    for k in a:
-        assert np.array_equal(a[k], b[k]), k
+    a = same_bits_on_one_and_two_ranks("s.toml", tmp_path)
     assert np.abs(a["energy/balance_error"]).max() < 0.01
 
 

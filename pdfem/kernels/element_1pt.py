@@ -67,7 +67,7 @@ from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_S, MODEL, SHEAR
 # points stiffness also the starting offsets of corners 1-3 from corner 0 (x1, y1, x2, y2, x3, y3)
 HG_COLS = 6
 HG_COLS_POINTS = 12
-# The hourglass spring's modulus (module docstring): the coefficient's or the bending one
+# The hourglass stiffness (module docstring): three spring moduli and the points energy
 HG_COEFFICIENT = 0
 HG_BENDING = 1
 HG_FULL = 2
@@ -139,8 +139,8 @@ def _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1, by2, by
 @njit(cache=True)
 def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1, f, ewint, ewp,
                   eth):
-    """One-point quads with total-form hourglass control (hg, with the spring's modulus
-    hg_model: HG_COEFFICIENT or HG_BENDING, module docstring) on elements [e0, e1).
+    """One-point quads with total-form hourglass control (hg, with the stiffness hg_model:
+    HG_COEFFICIENT, HG_BENDING, HG_FULL or HG_POINTS, module docstring) on elements [e0, e1).
 
     Updates sig (ne,1,4) and mst (ne,1,nst) in place, subtracts the internal
     forces from f (nn,2) element by element, adds stress and hourglass work to ewint and

@@ -49,6 +49,7 @@ def q4_strain_energy(x, conn, emat, mat_params, sig, hg, hg_model, e0, e1, out):
     non-positive area / Jacobian contributes its (non-positive) volume as is.
     """
     nip = sig.shape[1]
+    hb = np.empty(8)
     xc = np.empty((4, 2))
     dx = np.empty(4)
     dy = np.empty(4)
@@ -64,7 +65,6 @@ def q4_strain_energy(x, conn, emat, mat_params, sig, hg, hg_model, e0, e1, out):
             en = elastic_energy_density(p, sig[e, 0]) * a
             if hg.shape[0] > 0 and hg_model == HG_POINTS:
                 k, _ = _tangent_bulk(p, 1.0 - a / hg[e, 5])
-                hb = np.empty(8)
                 eh, _, _ = points_energy(hg[e, 6], hg[e, 7], hg[e, 8], hg[e, 9], hg[e, 10],
                                          hg[e, 11], xc[1, 0] - xc[0, 0], xc[1, 1] - xc[0, 1],
                                          xc[2, 0] - xc[0, 0], xc[2, 1] - xc[0, 1],

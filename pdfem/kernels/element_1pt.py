@@ -60,7 +60,7 @@ from pdfem.kernels.cap_surface import yield_value
 from pdfem.kernels.elastic import elastic_increment
 from pdfem.kernels.element import thermal_row
 from pdfem.kernels.eos import eos_row
-from pdfem.kernels.hourglass_points import points_energy
+from pdfem.kernels.hourglass_points import points_eval, start_data
 from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_S, MODEL, SHEAR
 
 # Columns of an element's hourglass reference: gamma_0..3, hg_coef A0 (b0.b0), A0; with the
@@ -260,14 +260,14 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
             ko, _ = _tangent_bulk(row, 1.0 - _area(x0 - u0, y0 - v0, x1 - u1, y1 - v1, x2 - u2,
                                                    y2 - v2, x3 - u3, y3 - v3) / a0)
             mu = row[SHEAR]
-            eo, _, ok = points_energy(hg[e, 6], hg[e, 7], hg[e, 8], hg[e, 9], hg[e, 10],
-                                      hg[e, 11], (x1 - u1) - (x0 - u0), (y1 - v1) - (y0 - v0),
-                                      (x2 - u2) - (x0 - u0), (y2 - v2) - (y0 - v0),
-                                      (x3 - u3) - (x0 - u0), (y3 - v3) - (y0 - v0),
-                                      ko - 2.0 * mu / 3.0, mu, hbuf)
-            en, s2, ok2 = points_energy(hg[e, 6], hg[e, 7], hg[e, 8], hg[e, 9], hg[e, 10],
-                                        hg[e, 11], x1 - x0, y1 - y0, x2 - x0, y2 - y0,
-                                        x3 - x0, y3 - y0, k - 2.0 * mu / 3.0, mu, hbuf)
+            # The energy at the last positions (no gradient) and now (with its forces)
+            start = start_data(hg[e, 6], hg[e, 7], hg[e, 8], hg[e, 9], hg[e, 10], hg[e, 11])
+            eo, _, ok = points_eval(start, (x1 - u1) - (x0 - u0), (y1 - v1) - (y0 - v0),
+                                    (x2 - u2) - (x0 - u0), (y2 - v2) - (y0 - v0),
+                                    (x3 - u3) - (x0 - u0), (y3 - v3) - (y0 - v0),
+                                    ko - 2.0 * mu / 3.0, mu, hbuf, False)
+            en, s2, ok2 = points_eval(start, x1 - x0, y1 - y0, x2 - x0, y2 - y0, x3 - x0,
+                                      y3 - y0, k - 2.0 * mu / 3.0, mu, hbuf, True)
             if not (ok and ok2):
                 return e
             ewint[e] += en - eo

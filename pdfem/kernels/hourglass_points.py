@@ -62,33 +62,53 @@ def _start_point(rx, ry, xi, et):
 
 
 @njit(cache=True)
+def start_data(r1x, r1y, r2x, r2y, r3x, r3y):
+    """What the energy needs of the starting element, from the offsets r_I = X_I - X_0 of
+    corners 1-3: the mean gradients (b0x, b0y) and, at each Gauss point, its weight and its
+    corners' gradients (w, gx, gy: four of each, point by point)."""
+    rx = (0.0, r1x, r2x, r3x)
+    ry = (0.0, r1y, r2y, r3y)
+    b0x, b0y = _start_mean_gradients(rx, ry)
+    w0, gx0, gy0 = _start_point(rx, ry, -GP, -GP)
+    w1, gx1, gy1 = _start_point(rx, ry, GP, -GP)
+    w2, gx2, gy2 = _start_point(rx, ry, GP, GP)
+    w3, gx3, gy3 = _start_point(rx, ry, -GP, GP)
+    return b0x, b0y, (w0, w1, w2, w3), (gx0, gx1, gx2, gx3), (gy0, gy1, gy2, gy3)
+
+
+@njit(cache=True)
 def points_energy(r1x, r1y, r2x, r2y, r3x, r3y, c1x, c1y, c2x, c2y, c3x, c3y, lam, mu, out):
     """(E, S2, ok) of one element (module docstring) from the starting offsets r_I = X_I - X_0
     and the current offsets c_I = x_I - x_0 of corners 1-3, with the moduli lam and mu;
     out[2I], out[2I+1] = dE/dx_I for the corners 0-3 (they add up to zero). S2 = dE/dlam =
     sum_g w_g (ln J_g)^2 / 2. ok is False (E, S2 and out unset) when F_c or a point's H is not
     positive."""
-    rx = (0.0, r1x, r2x, r3x)
-    ry = (0.0, r1y, r2y, r3y)
+    return points_eval(start_data(r1x, r1y, r2x, r2y, r3x, r3y), c1x, c1y, c2x, c2y, c3x, c3y,
+                       lam, mu, out, True)
+
+
+@njit(cache=True)
+def points_eval(start, c1x, c1y, c2x, c2y, c3x, c3y, lam, mu, out, grad):
+    """:func:`points_energy` from the element's :func:`start_data`; with ``grad`` False only
+    (E, S2, ok), out untouched (the energy at the last positions, whose change the step
+    books)."""
+    b0x, b0y, ws, gxs, gys = start
     cx = (0.0, c1x, c2x, c3x)
     cy = (0.0, c1y, c2y, c3y)
-    xi_n = (-1.0, 1.0, 1.0, -1.0)
-    et_n = (-1.0, -1.0, 1.0, 1.0)
-    # Starting mean gradients b0
-    b0x, b0y = _start_mean_gradients(rx, ry)
     # F_c and its inverse
     f11, f12, f21, f22 = _outer(cx, cy, b0x, b0y)
     dc = f11 * f22 - f12 * f21
     if not dc > 0.0:
         return 0.0, 0.0, False
     i11, i12, i21, i22 = f22 / dc, -f12 / dc, -f21 / dc, f11 / dc
-    for k in range(8):
-        out[k] = 0.0
+    if grad:
+        for k in range(8):
+            out[k] = 0.0
     e = 0.0
     s2 = 0.0
     for gp in range(4):
         # The point's starting weight and gradients
-        w, gx, gy = _start_point(rx, ry, GP * xi_n[gp], GP * et_n[gp])
+        w, gx, gy = ws[gp], gxs[gp], gys[gp]
         # F_g and H = F_g F_c^-1; the point's energy and S2
         g11, g12, g21, g22 = _outer(cx, cy, gx, gy)
         h11 = g11 * i11 + g12 * i21
@@ -102,6 +122,8 @@ def points_energy(r1x, r1y, r2x, r2y, r3x, r3y, c1x, c1y, c2x, c2y, c3x, c3y, la
         e += w * (0.5 * mu * (h11 * h11 + h12 * h12 + h21 * h21 + h22 * h22 - 2.0 - 2.0 * lj)
                   + 0.5 * lam * lj * lj)
         s2 += w * 0.5 * lj * lj
+        if not grad:
+            continue
         # P = mu (H - H^-T) + lam ln J H^-T, H^-T = [[h22, -h21], [-h12, h11]] / J
         t11, t12, t21, t22 = h22 / jj, -h21 / jj, -h12 / jj, h11 / jj
         p11 = mu * (h11 - t11) + lam * lj * t11

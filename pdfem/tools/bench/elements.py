@@ -82,7 +82,60 @@ def print_elements(n, repeat, log=print):
             f"{1e9 * c['numba'] / ne:.2f} ns/elem-update, C {1e9 * c['c'] / ne:.2f} "
             f"ns/elem-update, numba/C = {c['numba'] / c['c']:.2f} (target <= 1.6; largest "
             f"relative difference of the results {c['diff']:.1e})")
+    # The points hourglass stiffness against the coefficient spring, same mesh and kernel
+    pts = points_cost(nx, ny, repeat)
+    line = (f"1pt+hg hourglass_stiffness points: numba {1e9 * pts['points'] / ne:.2f} "
+            f"ns/elem-update = {pts['points'] / pts['coefficient']:.2f}x the coefficient "
+            f"spring's ({1e9 * pts['coefficient'] / ne:.2f})")
+    if c is not None:
+        line += f", {pts['points'] / c['c']:.2f}x the C yardstick"
+    log(line)
     return rows, c
+
+
+def _median_call(fn, args, repeat):
+    """Median seconds of ``repeat`` timed calls of fn(*args) after an untimed warm-up call."""
+    import time
+
+    fn(*args)
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn(*args)
+        times.append(time.perf_counter() - t0)
+    return sorted(times)[len(times) // 2]
+
+
+def points_cost(nx, ny, repeat):
+    """Median seconds per call of the numba 1-point elastic kernel with the coefficient spring
+    and with the points hourglass stiffness on one bench mesh (dict)."""
+    import numpy as np
+
+    from pdfem.kernels.element_1pt import (
+        HG_COEFFICIENT,
+        HG_COLS_POINTS,
+        HG_POINTS,
+        hourglass_reference,
+        q4_forces_1pt,
+    )
+    from pdfem.kernels.params import BULK, ELASTIC, MODEL, NPAR, RHO, SHEAR
+    from pdfem.tools.bench.numpy_element import bench_mesh
+
+    x, conn = bench_mesh(nx, ny)
+    ne = conn.shape[0]
+    mat = np.zeros((1, NPAR))
+    mat[0, [MODEL, RHO, BULK, SHEAR]] = [ELASTIC, 2000.0, 1e10, 6e9]
+    du = np.random.default_rng(1).uniform(-1e-6, 1e-6, size=x.shape)
+    hg = np.zeros((ne, HG_COLS_POINTS))
+    hourglass_reference(x, conn, 0.1, 0, ne, hg)
+    out = {}
+    # One kernel, two stiffnesses: the spring reads hg's first six columns only
+    for name, model in (("coefficient", HG_COEFFICIENT), ("points", HG_POINTS)):
+        args = (x + du, du, conn, np.zeros(ne, np.int32), mat, np.zeros((ne, 1, 4)),
+                np.zeros((ne, 1, 0)), hg, model, 0, ne, np.zeros_like(x), np.zeros(ne),
+                np.zeros(ne), np.zeros((0, 3)))
+        out[name] = _median_call(q4_forces_1pt, args, repeat)
+    return out
 
 
 def c_yardstick(nx, ny, repeat):

@@ -31,6 +31,10 @@ def test_bench_elements_prints_both_rules_and_implementations(tmp_path):
             assert _positive(m.groups())
         m = re.search(rf"^speed-up numba/numpy {re.escape(rule)}: {NUM}x$", out, re.M)
         assert m and _positive(m.groups())
+    # The points hourglass stiffness's cost beside the spring's
+    m = re.search(rf"^1pt\+hg hourglass_stiffness points: numba {NUM} ns/elem-update = {NUM}x "
+                  rf"the coefficient spring's \({NUM}\)", out, re.M)
+    assert m and _positive(m.groups()), out
 
 
 def test_bench_contact_prints_the_bed_row(tmp_path):

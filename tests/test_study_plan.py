@@ -62,3 +62,38 @@ def test_errors_pareto_and_the_choice():
     # The baseline of the axes: the cheapest grid run within the tolerance
     assert acc.baseline(rows, 0.05).label == "L1-2x2-s0.5-k1"
     assert acc.baseline(rows, 0.001).label == "L2-2x2-s0.5-k1"
+
+
+def test_speed_rungs_hold_the_piston_until_the_slowest_front_has_crossed():
+    """study speeds' rungs: times scaled by 288/V, and from 500 m/s on the release moved so
+    that the piston starts to slow only once the slowest front the bed allows (the sweep's
+    bound, H0 / Us_min) has crossed; the end moves with it. At 288 m/s the packaged scene
+    already holds it that long and the rung is the scaled scene unchanged."""
+    from pdfem.scene import parse_scene
+    from pdfem.tools.study import hugoniot as hg
+    from pdfem.tools.study import speeds as sp
+
+    doc = sp.packaged_doc("small")
+    (bc0,) = [b for b in doc["bc"] if "release" in b]
+    for v in (288.0, 2000.0):
+        plain, held = sp.piston_doc(doc, v, "2x2", 1), sp.rung_doc(doc, v, "2x2", 1)
+        (bp,), (bh,) = ([b for b in d["bc"] if "release" in b] for d in (plain, held))
+        f = 288.0 / v
+        assert bp["release"] == bc0["release"] * f and bp["ramp_down"] == bc0["ramp_down"] * f
+        scene = parse_scene(plain, ".", name="rung")
+        H0, phi0, _ = hg.bed_figures(scene)
+        us = hg.slowest_front(v, 1900.0 * phi0, 1900.0, hg.grain_material(scene.resolved))
+        assert math.isclose(sp.crossing_time(scene, v), H0 / us, rel_tol=1e-15)
+        if v == 288.0:
+            assert held == plain
+            assert bp["release"] - bp["ramp_down"] >= H0 / us
+            continue
+        # 2 mm / 4063 m/s = 0.492 us, where the scaled release starts slowing at 0.372 us
+        assert bp["release"] - bp["ramp_down"] < 0.8 * H0 / us
+        assert math.isclose(bh["release"] - bh["ramp_down"], H0 / us, rel_tol=1e-12)
+        assert bh["ramp_down"] == bp["ramp_down"]
+        assert math.isclose(held["time"]["end"] - plain["time"]["end"],
+                            bh["release"] - bp["release"], rel_tol=1e-12)
+        held["bc"], plain["bc"] = None, None
+        held["time"]["end"] = plain["time"]["end"]
+        assert held == plain

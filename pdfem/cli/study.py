@@ -444,7 +444,7 @@ def _speeds(args):
     for level in levels:
         for v in speeds:
             rung = {"bed": args.bed, "rule": args.rule, "level": level, "velocity": v}
-            scene = parse_scene(sp.piston_doc(doc, v, args.rule, level, args.mesh), ".",
+            scene = parse_scene(sp.rung_doc(doc, v, args.rule, level, args.mesh), ".",
                                 name=f"{sp.BEDS[args.bed]} ({sp.rung_name(rung)})")
             rungs.append((rung, scene))
     check_ranks(rungs[0][1], comm.size)

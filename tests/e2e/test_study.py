@@ -104,7 +104,7 @@ def test_speeds_study_on_2_ranks(tmp_path):
     run file is the one `pdfem run` makes of the same scene on 1 rank."""
     import numpy as np
 
-    from pdfem.tools.study.speeds import packaged_doc, piston_doc
+    from pdfem.tools.study.speeds import packaged_doc, rung_doc
     from tests.helpers import datasets
 
     p = pdfem(["study", "speeds", "--rule", "1pt", "--levels", "1", "--speeds", "1500"],
@@ -118,7 +118,7 @@ def test_speeds_study_on_2_ranks(tmp_path):
     assert r["energy_error"] < 0.01 and 3000.0 < r["us"] < 3600.0 and 0.0 < r["folded"] < 0.01
     assert r["rho1_max"] > 1900.0 and r["us_min"] > 0.0 and isinstance(r["bound_kept"], bool)
     assert "small    1pt      1     1500  runs" in p.stdout
-    write_scene(tmp_path / "one.toml", piston_doc(packaged_doc("small"), 1500.0, "1pt", 1))
+    write_scene(tmp_path / "one.toml", rung_doc(packaged_doc("small"), 1500.0, "1pt", 1))
     one = pdfem(["run", "one.toml", "-o", "one.h5", "--quiet"], tmp_path)
     assert one.returncode == 0, one.stderr
     a = datasets(tmp_path / "one.h5")

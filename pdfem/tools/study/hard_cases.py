@@ -16,7 +16,7 @@ import numpy as np
 from pdfem.io.bedfile import write_bed
 from pdfem.mesh.ellipse import ellipse_mesh, place
 from pdfem.mesh.quality import jacobian_ratio
-from pdfem.tools.study.speeds import packaged_doc, piston_doc
+from pdfem.tools.study.speeds import packaged_doc, rung_doc
 
 # The elastic grain of the non-shock cases (HMX-like moduli)
 GRAIN = {"model": "elastic", "density": 1900.0, "bulk": 12.7e9, "shear": 4.4e9}
@@ -66,12 +66,13 @@ def hammer_2000(folder, size):
 
 def _piston(size, speed, level_large, level_ci=1, end_ci=1.0e-7, mesh="ring", eos=True,
             law="area"):
-    """The small shot-912 bed's piston at ``speed`` (pdfem.tools.study.speeds.piston_doc:
-    times scaled by 288/speed): level_ci for end_ci at CI size, level_large to the scene's end
-    for large, on ``mesh`` meshes; eos: the crystal on its Us-up Hugoniot (the packaged
-    scene's), else a linear bulk modulus; law: the contact law."""
-    doc = piston_doc(packaged_doc("small"), speed, "2x2",
-                     level_ci if size == "ci" else level_large, mesh)
+    """The small shot-912 bed's piston at ``speed`` (pdfem.tools.study.speeds.rung_doc:
+    times scaled by 288/speed, the piston held until the slowest front has crossed): level_ci
+    for end_ci at CI size, level_large to the scene's end for large, on ``mesh`` meshes; eos:
+    the crystal on its Us-up Hugoniot (the packaged scene's), else a linear bulk modulus; law:
+    the contact law."""
+    doc = rung_doc(packaged_doc("small"), speed, "2x2",
+                   level_ci if size == "ci" else level_large, mesh)
     if size == "ci":
         doc["time"]["end"] = end_ci
     end = doc["time"]["end"]

@@ -4,20 +4,27 @@ levels, each run to the scene's end, analysed and checked against the bound of i
 A rung is the packaged scene (``shot912_small.toml`` or ``shot912.toml``) with only the piston
 changed, as a user would change it: the hammer block's velocity and its ``[[bc]]`` velocity set
 to V, and the scene's end, the piston's release and ramp-down and the output intervals scaled
-by 288 m/s / V, so that the front crosses the bed at every speed; ``[element]`` takes the
-rung's rule and level and keeps the scene's other keys. Every rung runs on all ranks of the
-command (the same bits on any number); a rung that stops on a guard is a row with the guard's
-message and the study goes on. A row holds what the stability of a hard impact is judged by
-(to the end or not, the largest energy-balance error, the share of the grains' area in folded
-corners) and what its answer is checked with (Us, up, the piston's stress, rho1, the bound of
-the bed compacted to its grains' own compression at that stress, the anvil gauge's arrival,
-the final compaction).
+by 288 m/s / V; ``[element]`` takes the rung's rule and level and keeps the scene's other keys.
+The piston is then held at V at least until the slowest steady front the bed allows has crossed
+it (:func:`crossing_time`, the sweep's bound), the release and the end moved later where the
+scaled release would bring it to rest sooner: a front is measured only while its piston drives
+it. The packaged scenes hold the piston that long at 288 m/s; scaled by 288/V alone, the
+release would come before that crossing from 500 m/s on (by 24 % of it at 2000 m/s).
+
+Every rung runs on all ranks of the command (the same bits on any number); a rung that stops on
+a guard is a row with the guard's message and the study goes on. A row holds what the stability
+of a hard impact is judged by (to the end or not, the largest energy-balance error, the share of
+the grains' area in folded corners) and what its answer is checked with (Us, up, the piston's
+stress, rho1, the bound of the bed compacted to its grains' own compression at that stress, the
+anvil gauge's arrival, the final compaction).
 """
 
 import copy
 import os
 import tomllib
 from importlib import resources
+
+from pdfem.errors import InputError
 
 # The packaged beds and the speed their times are written for [m/s]
 BEDS = {"small": "shot912_small.toml", "default": "shot912.toml"}
@@ -33,10 +40,12 @@ def packaged_doc(bed):
     return doc
 
 
-def piston_doc(doc, speed, rule, level, mesh=None):
+def piston_doc(doc, speed, rule, level, mesh=None, hold=0.0):
     """A rung: ``doc`` with the piston at ``speed`` (hammer block and velocity condition),
     its end, release, ramp-down and output intervals scaled by SCENE_SPEED / speed, and the
-    element rule and level (and mesh, when given) of the rung. ``doc`` is not changed."""
+    element rule and level (and mesh, when given) of the rung; a release that would start
+    bringing the piston to rest before ``hold`` [s] moves to hold + ramp-down, and the end by
+    as much. ``doc`` is not changed."""
     d = copy.deepcopy(doc)
     f = SCENE_SPEED / speed
     for b in d.get("blocks", []) + d.get("bc", []):
@@ -46,12 +55,45 @@ def piston_doc(doc, speed, rule, level, mesh=None):
             if key in b:
                 b[key] *= f
     d["time"]["end"] *= f
+    # Held until hold: the release later, the time after it kept
+    released = [b for b in d.get("bc", []) if "release" in b]
+    shift = max([hold + b.get("ramp_down", 0.0) - b["release"] for b in released], default=0.0)
+    if shift > 0.0:
+        for b in released:
+            b["release"] += shift
+        d["time"]["end"] += shift
     for key in ("interval", "energy_interval", "gauge_interval"):
         if key in d.get("output", {}):
             d["output"][key] *= f
     d["element"] = {**d.get("element", {}), "rule": rule, "level": level,
                     **({"mesh": mesh} if mesh else {})}
     return d
+
+
+def crossing_time(scene, speed):
+    """Seconds the slowest steady front the bed of a shock ``scene`` allows at particle speed
+    ``speed`` takes to cross it (pdfem.tools.study.hugoniot.slowest_front: the bed compacted
+    to its grains' own compression under the front's stress; the bed's height and packing of
+    the scene's meshes); InputError when no density the bed can hold carries that stress."""
+    from pdfem.tools.study import hugoniot as hg
+
+    H0, phi0, _ = hg.bed_figures(scene)
+    rho_s = scene.resolved["shock"]["solid_density"]
+    us = hg.slowest_front(speed, phi0 * rho_s, rho_s, hg.grain_material(scene.resolved))
+    if not us > 0.0:
+        raise InputError(f"--speeds: at {speed:g} m/s the front's stress would crush the grains "
+                         "past any density this bed can hold")
+    return H0 / us
+
+
+def rung_doc(doc, speed, rule, level, mesh=None):
+    """:func:`piston_doc` with the piston held until the slowest front has crossed the bed
+    (:func:`crossing_time` of the rung's own meshes)."""
+    from pdfem.scene import parse_scene
+
+    first = parse_scene(piston_doc(doc, speed, rule, level, mesh), ".",
+                        name=f"{doc.get('output', {}).get('path', 'scene')} at {speed:g} m/s")
+    return piston_doc(doc, speed, rule, level, mesh, hold=crossing_time(first, speed))
 
 
 def rung_name(rung):

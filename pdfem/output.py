@@ -12,6 +12,7 @@ import math
 from pdfem.energy import balance, balance_scale, global_terms
 from pdfem.errors import SimulationError
 from pdfem.gauges import Gauges
+from pdfem.io.claim import Claim
 from pdfem.io.h5out import RunWriter
 from pdfem.io.restart import Checkpointer
 from pdfem.parallel.mpi import broadcast
@@ -32,6 +33,8 @@ class RunOutput:
 
     def __init__(self, sim, out_path, log=print):
         self.sim, self.log = sim, log
+        # The run file is this run's alone until it is in place (InputError if another's)
+        self.claim = Claim(out_path, sim.comm)
         out = sim.resolved["output"]
         nframes = math.floor(sim.t_end / out["interval"] * (1 + 1e-12)) + 2
         # Frame datasets are allocated up front (parallel HDF5): no more than the steps allow
@@ -133,10 +136,12 @@ class RunOutput:
     def close(self):
         """Finish the run file: energy series, gauges, rename into place (collective)."""
         self.writer.close(self.rows, self.sim.terms, ok=True, gauges=self.gauges)
+        self.claim.release()
 
     def suspend(self):
         """Leave the run file for a restart (collective)."""
         self.writer.suspend()
+        self.claim.release()
 
     def balance_error(self):
         """The last energy sample's balance error (rank 0; None elsewhere or before one)."""

@@ -565,3 +565,30 @@ def test_a_checkpoint_of_an_earlier_version_restarts_or_is_refused(tmp_path):
     p = pdfem(["run", "1pt.toml", "--restart", "1pt.h5.ckpt.h5", "-o", "o.h5"], tmp_path)
     assert p.returncode == 2 and "1-point hourglass forces of an earlier version" in p.stderr
     assert len(p.stderr.strip().splitlines()) == 1, p.stderr
+
+
+def test_a_second_run_on_the_same_run_file_stops_before_writing(tmp_path):
+    """While a run writes c.h5 (its claim c.h5.lock held), a second run on c.h5 stops at
+    set-up with one line and status 2, writing nothing; the first goes on untouched, and once
+    it has stopped (SIGTERM: checkpoint, run file left as .part) the lock file is gone. A
+    stale lock file, held by no process, does not stop a run."""
+    scene = _bed(tmp_path, 400000)
+    first = _start(["run", scene, "-o", "c.h5", "--quiet"], tmp_path)
+    _wait_for(tmp_path / "c.h5.part")
+    assert (tmp_path / "c.h5.lock").exists()
+    before = sorted(os.listdir(tmp_path))
+    second = pdfem(["run", scene, "-o", "c.h5", "--quiet"], tmp_path)
+    assert second.returncode == 2, second.stderr
+    assert second.stderr.strip() == ("pdfem: error: output.path: c.h5: another run is writing "
+                                     "it now (it holds c.h5.lock)")
+    assert first.poll() is None and sorted(os.listdir(tmp_path)) == before
+    first.send_signal(signal.SIGTERM)
+    out, err = first.communicate(timeout=120)
+    assert first.returncode == 0, err
+    assert (tmp_path / "c.h5.part").exists() and (tmp_path / "c.h5.ckpt.h5").exists()
+    assert not (tmp_path / "c.h5.lock").exists()
+    # A lock file left by a process that died holds nothing
+    (tmp_path / "d.h5.lock").write_text("")
+    p = pdfem(["run", _bed(tmp_path, 400), "-o", "d.h5", "--quiet"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert (tmp_path / "d.h5").exists() and not (tmp_path / "d.h5.lock").exists()

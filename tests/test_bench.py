@@ -1,6 +1,7 @@
 """``pdfem bench``: the commands run and print their figure lines (figures are never asserted
 against timings, only parsed as positive numbers)."""
 
+import math
 import os
 import re
 
@@ -94,12 +95,45 @@ def test_bench_checkpoint_prints_time_and_rank_0_memory(tmp_path):
     ["bench", "all", "--per-rank", "x"],
     ["bench", "startup", "--repeat", "0"],
     ["bench", "contact", "--material", "rubber"],
+    ["bench", "job", "--summary", "missing-summary.json"],
 ])
 def test_bench_bad_arguments_exit_2_with_one_line(tmp_path, args):
     p = pdfem(args, tmp_path)
     assert p.returncode == 2
     assert p.stderr.startswith("pdfem: error:") and p.stderr.count("\n") == 1, p.stderr
     assert p.stdout == ""
+
+
+@pytest.mark.parametrize("text,key", [
+    ("{", "run: not a run's summary JSON (no run table)"),
+    ('{"front": {}}', "run: not a run's summary JSON (no run table)"),
+    ('{"run": {"steps": 10}}', "run.wall_s: missing or not a number"),
+    ('{"run": {"wall_s": -1.0}}', "run.wall_s: -1.0 is not a positive time"),
+])
+def test_bench_job_refuses_a_bad_summary(tmp_path, text, key):
+    (tmp_path / "s.json").write_text(text)
+    p = pdfem(["bench", "job", "--summary", "s.json"], tmp_path)
+    assert p.returncode == 2 and p.stdout == "", p.stderr
+    assert p.stderr == f"pdfem: error: --summary: s.json: {key}\n"
+
+
+def test_bench_job_prints_the_job_in_yardsticks(tmp_path):
+    """The yardstick measured now (the 10^3-grain cap bed's step times 36 433 x 218), the
+    job's wall time read from its summary, and their ratio beside the target."""
+    (tmp_path / "s.json").write_text('{"run": {"wall_s": 208.5, "steps": 36433, "ranks": 2, '
+                                     '"phases": {"elements": 119.0, "contact_forces": 80.0}}}')
+    p = pdfem(["bench", "job", "--summary", "s.json", "--repeat", "1"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    out = p.stdout
+    y = re.search(rf"^yardstick: {NUM} us per grain-step x 36433 x 218 = {NUM} s$", out, re.M)
+    assert y and _positive(y.groups()), out
+    assert math.isclose(float(y.group(1)) * 1e-6 * 36433 * 218, float(y.group(2)), rel_tol=1e-2)
+    assert ("default job (s.json): 208.5 s, 36433 steps on 2 rank(s); phases elements 119.0 s, "
+            "contact_forces 80.0 s") in out
+    r = re.search(rf"^default job / yardstick = {NUM} \(target <= 2.5: (met|not met)\)$", out,
+                  re.M)
+    assert r and math.isclose(float(r.group(1)), 208.5 / float(y.group(2)), rel_tol=2e-2), out
+    assert (r.group(2) == "met") == (float(r.group(1)) <= 2.5)
 
 
 def test_bench_all_prints_every_figure_beside_its_target(tmp_path):

@@ -1,5 +1,5 @@
-"""``pdfem bench {elements,contact,peers,parallel,checkpoint,startup,all}``: print performance
-figures.
+"""``pdfem bench {elements,contact,peers,parallel,checkpoint,startup,job,all}``: print
+performance figures.
 
 elements: element updates per second of both integration rules, numba kernels vs their
 numpy twins and the 1-point kernel vs its C yardstick (pdfem.tools.bench.elements); with
@@ -11,7 +11,9 @@ frictional discs, when lmp is on the PATH (pdfem.tools.bench.peers). parallel: h
 migration cost, under mpirun (pdfem.tools.bench.parallel). checkpoint: the time of a
 checkpoint's write and of a restart's set-up, and rank 0's memory during both, on any number
 of ranks (pdfem.tools.bench.checkpoint). startup: seconds to the first step of a fresh process
-(pdfem.tools.bench.startup). all: every figure with its target (pdfem.tools.bench.suite).
+(pdfem.tools.bench.startup). job: the default job (mpirun -n 2 python -m pdfem, run in a
+scratch folder, or a summary it wrote) in units of the 10^3-grain cap bed's step
+(pdfem.tools.bench.job). all: every figure with its target (pdfem.tools.bench.suite).
 Figures are printed, never asserted; all but parallel and checkpoint run on one rank.
 """
 
@@ -50,7 +52,7 @@ def add_parser(sub):
     p = sub.add_parser("bench", help="print performance figures",
                        description=__doc__.split("\n\n")[1])
     what = p.add_subparsers(dest="what", required=True, parser_class=type(p),
-                            metavar="{elements,contact,peers,parallel,checkpoint,startup,all}")
+                            metavar="{elements,contact,peers,parallel,checkpoint,startup,job,all}")
     # Arguments of each sub-command (all takes the union)
     el = what.add_parser("elements", help="element force kernels: numba vs numpy and C")
     co = what.add_parser("contact", help="whole steps of dense grain beds")
@@ -60,6 +62,7 @@ def add_parser(sub):
     ck = what.add_parser("checkpoint", help="checkpoint write and restart: time, rank 0's "
                          "memory (any number of ranks)")
     su = what.add_parser("startup", help="seconds to the first step, cold and warm")
+    jo = what.add_parser("job", help="the default job's wall time over the machine's yardstick")
     al = what.add_parser("all", help="every figure with its target")
     for q in (el, al):
         q.add_argument("--n", default="100000", help="number of elements (default 100000)")
@@ -81,7 +84,9 @@ def add_parser(sub):
     for q in (su, al):
         q.add_argument("--warm-only", action="store_true", help="skip the cold start (a "
                        "private empty numba cache: every kernel compiled, about 30 s)")
-    for q in (el, co, pe, pa, ck, su, al):
+    jo.add_argument("--summary", default=None, help="a summary JSON of the default job "
+                    "(<run>-summary.json) instead of running it")
+    for q in (el, co, pe, pa, ck, su, jo, al):
         q.add_argument("--repeat", default="5", help="timed samples; the median is printed "
                        "(default 5)")
     return p
@@ -138,6 +143,10 @@ def run(args):
         from pdfem.tools.bench.contact import print_contact
 
         print_contact(sizes, repeat, log=_log, material=args.material)
+    elif args.what == "job":
+        from pdfem.tools.bench.job import print_job
+
+        print_job(repeat, args.summary, log=_log)
     elif args.what == "peers":
         from pdfem.tools.bench.peers import print_peers
 

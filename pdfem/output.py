@@ -33,8 +33,6 @@ class RunOutput:
 
     def __init__(self, sim, out_path, log=print):
         self.sim, self.log = sim, log
-        # The run file is this run's alone until it is in place (InputError if another's)
-        self.claim = Claim(out_path, sim.comm)
         out = sim.resolved["output"]
         nframes = math.floor(sim.t_end / out["interval"] * (1 + 1e-12)) + 2
         # Frame datasets are allocated up front (parallel HDF5): no more than the steps allow
@@ -50,6 +48,17 @@ class RunOutput:
         self.gauges = Gauges(sim.state, sim.ctx, saved, where)
         self.gsched = Schedule(out["gauge_interval"])
         self.ckpt = Checkpointer(sim, out_path, out)
+        # The run file is this run's alone until it is in place (InputError if another's);
+        # a set-up that fails from here on gives the claim back
+        self.claim = Claim(out_path, sim.comm)
+        try:
+            self._start(sim, out_path, out, nframes)
+        except BaseException:
+            self.claim.release()
+            raise
+
+    def _start(self, sim, out_path, out, nframes):
+        """The run file opened (or resumed) and the t = 0 samples, or the checkpoint's."""
         self.writer = RunWriter(out_path, sim.state, sim.ctx, nframes, out["fields"],
                                 resume=self.ckpt.resume() if sim.restarted else None)
         self.rows, self.ref = [], None

@@ -517,7 +517,8 @@ def test_restart_into_a_new_run_file_starts_with_the_checkpoints_contact_forces(
 
 
 def test_restart_refuses_a_damaged_segment(tmp_path):
-    """A segment the checkpoint lists, damaged: one line naming the file, exit 2."""
+    """A segment the checkpoint lists, damaged: one line naming the file, exit 2, and no lock
+    file left."""
     scene = _kill_scene(tmp_path)
     (tmp_path / "kill.py").write_text(KILL_AT)
     p = subprocess.run([sys.executable, "kill.py", "close", "3", "run", scene, "-o", "k.h5",
@@ -528,6 +529,8 @@ def test_restart_refuses_a_damaged_segment(tmp_path):
     p = pdfem(["run", scene, "--restart", "k.h5.ckpt.h5", "-o", "k.h5"], tmp_path)
     assert p.returncode == 2 and "Traceback" not in p.stderr, p.stderr
     assert len(p.stderr.strip().splitlines()) == 1 and "k.h5.part.1" in p.stderr, p.stderr
+    # The killed run's lock file was taken, and given back with the refusal
+    assert not (tmp_path / "k.h5.lock").exists()
 
 
 def _as_earlier_version(path):

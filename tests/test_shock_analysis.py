@@ -354,3 +354,27 @@ def test_analyse_temperature_without_velocities(tmp_path):
     assert s["shocked"]["up"] == pytest.approx(UP, rel=0.02)
     assert any("differenced" in n for n in s["notes"])
     assert (tmp_path / "heat-snapshots.png").stat().st_size > 1000
+
+
+def test_nodes_inside_another_grains_interior_elements():
+    """A 3 x 3 grain has one interior element (the centre); a node of another grain inside it
+    is counted, one inside a boundary element (ordinary contact overlap) or on no element is
+    not, and the grain's own nodes never are."""
+    from pdfem.tools.analysis.interpenetration import interior_elements, nodes_inside_interiors
+
+    # Grain 0: unit quads on [0, 3]^2, nodes i + 4 j, counter-clockwise
+    xa = np.array([[i, j] for j in range(4) for i in range(4)], float)
+    conn = np.array([[i + 4 * j, i + 1 + 4 * j, i + 5 + 4 * j, i + 4 + 4 * j]
+                     for j in range(3) for i in range(3)])
+    assert np.flatnonzero(interior_elements(conn)).tolist() == [4]
+    # Grain 1: one quad whose corners sit in the centre element, a boundary element, outside
+    xb = np.array([[1.5, 1.5], [2.5, 0.5], [4.0, 0.5], [4.0, 1.5]])
+    x = np.vstack([xa, xb])
+    conn_all = np.vstack([conn, [[16, 17, 18, 19]]])
+    node_body = np.array([0] * 16 + [1] * 4)
+    elem_body = np.array([0] * 9 + [1])
+    inside = nodes_inside_interiors(x, conn_all, elem_body, node_body)
+    assert np.flatnonzero(inside).tolist() == [16]
+    # Moved out of the centre element, nothing is inside
+    x[16] = [0.5, 2.5]
+    assert not nodes_inside_interiors(x, conn_all, elem_body, node_body).any()

@@ -117,6 +117,8 @@ def test_speeds_study_on_2_ranks(tmp_path):
     # 0.11 % balance error, 0.21 % of the area folded (2.7 % with the coefficient spring)
     assert r["energy_error"] < 0.01 and 3000.0 < r["us"] < 3600.0 and 0.0 < r["folded"] < 0.01
     assert r["rho1_max"] > 1900.0 and r["us_min"] > 0.0 and isinstance(r["bound_kept"], bool)
+    # Level 1's quads all touch their grain's boundary: no interior element to pass into
+    assert r["interpenetrated"] == 0.0
     assert "small    1pt      1     1500  runs" in p.stdout
     write_scene(tmp_path / "one.toml", rung_doc(packaged_doc("small"), 1500.0, "1pt", 1))
     one = pdfem(["run", "one.toml", "-o", "one.h5", "--quiet"], tmp_path)

@@ -11,6 +11,7 @@ import numpy as np
 
 from pdfem.tools.analysis import compaction as cp
 from pdfem.tools.analysis import front as fr
+from pdfem.tools.analysis.interpenetration import nodes_inside_interiors
 from pdfem.tools.analysis.runfile import read_run
 
 NAN = float("nan")
@@ -129,6 +130,12 @@ def compute(run):
     # How much of the grains' area lies in folded corners, over the front's window and at the
     # end (a mesh folded over itself is denser than any material in it)
     folded = run.folded[frames] if frames.size else run.folded[-1:]
+    # Grain nodes that have passed into another grain's interior elements by the end, where no
+    # contact acts (pdfem.tools.analysis.interpenetration)
+    gsel = run.elem_body < run.ng
+    inside = nodes_inside_interiors(run.frame(len(run.time) - 1)[0], run.conn[gsel],
+                                    run.elem_body[gsel], run.node_body)
+    interp = float(inside.sum()) / max(1, int(np.count_nonzero(run.node_body < run.ng)))
     comp = cp.compaction(t, run.grain_y, run.grain_mass, run.anvil_y, run.hammer_y,
                          run.grain_top, H0)
     # The whole bed's Hugoniot from the faces: a driven (rigid) hammer's face stress is the
@@ -184,7 +191,7 @@ def compute(run):
                      "us_at_impact_speed": snow0["us"]},
         "bound": {**bound, "sigma": mom["sigma"]},
         "mesh": {"folded_front": float(np.max(folded)), "folded_end": float(run.folded[-1]),
-                 "folded_max": float(np.max(run.folded))},
+                 "folded_max": float(np.max(run.folded)), "interpenetrated_end": interp},
         "compaction": {k: comp[k] for k in ("peak", "t_peak", "final", "t_final", "kept",
                                             "peak_height", "final_height")},
         "gauges": {"hammer_peak": float(np.max(hcomp)) if hcomp.size else NAN,
@@ -284,7 +291,11 @@ def report_text(s):
         f"corners while the front crosses, {_f(m['folded_end'], 100, '.2f')} % at the end"
         + ("" if m["folded_max"] <= FOLDED_LIMIT else
            f" (more than {_f(FOLDED_LIMIT, 100, '.0f')} %: meshes folded over themselves, the "
-           "answer is the mesh's)"),
+           "answer is the mesh's)")
+        + f"; grain nodes inside another grain's interior elements at the end "
+          f"{_f(m['interpenetrated_end'], 100, '.2f')} %"
+        + ("" if not m["interpenetrated_end"] > 0.0 else
+           " (grains passed into each other where no contact acts: the answer is not the bed's)"),
         f"compaction strain (centre of mass): peak {_f(c['peak'], 1, '.3f')} at "
         f"{_f(c['t_peak'], 1e6, '.2f')} us, final {_f(c['final'], 1, '.3f')} at "
         f"{_f(c['t_final'], 1e6, '.2f')} us ({_f(c['kept'], 100, '.0f')} % of the peak kept); "

@@ -14,9 +14,10 @@ release would come before that crossing from 500 m/s on (by 24 % of it at 2000 m
 Every rung runs on all ranks of the command (the same bits on any number); a rung that stops on
 a guard is a row with the guard's message and the study goes on. A row holds what the stability
 of a hard impact is judged by (to the end or not, the largest energy-balance error, the share of
-the grains' area in folded corners) and what its answer is checked with (Us, up, the piston's
-stress, rho1, the bound of the bed compacted to its grains' own compression at that stress, the
-anvil gauge's arrival, the final compaction).
+the grains' area in folded corners, the grain nodes that ended inside another grain's interior
+elements) and what its answer is checked with (Us, up, the piston's stress, rho1, the bound of the
+bed compacted to its grains' own compression at that stress, the anvil gauge's arrival, the final
+compaction).
 """
 
 import copy
@@ -110,6 +111,7 @@ def row_of(rung, summary, wall_s, steps):
             "rho1": h["rho1"], "rho1_max": bd["rho1_max"], "us_min": bd["us_min"],
             "bound_kept": bd["kept"], "arrival": f["arrival_gauge"],
             "compaction": summary["compaction"]["final"], "folded": m["folded_max"],
+            "interpenetrated": m["interpenetrated_end"],
             "momentum_closure": summary["jump"]["momentum_closure"]}
 
 
@@ -126,7 +128,7 @@ def table_lines(rows):
     """The printed table: one line per rung."""
     out = ["bed      rule level  V [m/s]  result           energy err  folded   Us [m/s]"
            "          up [m/s]  sigma [GPa]  rho1 (max) [kg/m3]  Us bound  bound   arrival "
-           "[us]  compaction"]
+           "[us]  compaction  interpenetrated"]
     for r in rows:
         head = f"{r['bed']:8s} {r['rule']:4s} {r['level']:5d}  {r['velocity']:7g}  "
         if not r["runs"]:
@@ -137,7 +139,7 @@ def table_lines(rows):
                    f"{r['up']:8.1f}  {r['sigma'] * 1e-9:11.3f}  {r['rho1']:7.0f} "
                    f"({r['rho1_max']:5.0f})    {r['us_min']:8.0f}  "
                    f"{'kept' if r['bound_kept'] else 'BROKEN':6s}  {r['arrival'] * 1e6:12.4f}  "
-                   f"{r['compaction']:10.3f}")
+                   f"{r['compaction']:10.3f}  {_pct(r['interpenetrated']):>15s}")
     return out
 
 

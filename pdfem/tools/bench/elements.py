@@ -11,6 +11,7 @@ import platform
 import statistics
 
 from pdfem.tools.bench.numpy_element import bench_elements
+from pdfem.tools.bench.timing import median_call
 
 # Integration rules and how the table names them
 RULES = (("1pt", "1pt+hg"), ("2x2", "2x2"))
@@ -93,19 +94,6 @@ def print_elements(n, repeat, log=print):
     return rows, c
 
 
-def _median_call(fn, args, repeat):
-    """Median seconds of ``repeat`` timed calls of fn(*args) after an untimed warm-up call."""
-    import time
-
-    fn(*args)
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn(*args)
-        times.append(time.perf_counter() - t0)
-    return sorted(times)[len(times) // 2]
-
-
 def points_cost(nx, ny, repeat):
     """Median seconds per call of the numba 1-point elastic kernel with the coefficient spring
     and with the points hourglass stiffness on one bench mesh (dict)."""
@@ -134,14 +122,13 @@ def points_cost(nx, ny, repeat):
         args = (x + du, du, conn, np.zeros(ne, np.int32), mat, np.zeros((ne, 1, 4)),
                 np.zeros((ne, 1, 0)), hg, model, 0, ne, np.zeros_like(x), np.zeros(ne),
                 np.zeros(ne), np.zeros((0, 3)))
-        out[name] = _median_call(q4_forces_1pt, args, repeat)
+        out[name] = median_call(q4_forces_1pt, args, repeat)
     return out
 
 
 def c_yardstick(nx, ny, repeat):
     """Median seconds per call of the numba 1-point kernel and its C twin on one mesh, and the
     largest relative difference of their stresses, forces and stress work (or None)."""
-    import time
 
     import numpy as np
 
@@ -167,12 +154,7 @@ def c_yardstick(nx, ny, repeat):
                 0, 0, ne, f, ewint, np.zeros(ne), np.zeros((0, 3)))
         fn(*args)  # warm-up; also the state compared below (one call from zero)
         res = (sig.copy(), f.copy(), ewint.copy())
-        times = []
-        for _ in range(repeat):
-            t0 = time.perf_counter()
-            fn(*args)
-            times.append(time.perf_counter() - t0)
-        out[name] = sorted(times)[len(times) // 2]
+        out[name] = median_call(fn, args, repeat, warm=False)
         out[name + "_res"] = res
     out["diff"] = max(float(np.max(np.abs(a - b)) / max(np.max(np.abs(a)), 1e-300))
                       for a, b in zip(out["numba_res"], out["c_res"], strict=True))

@@ -12,7 +12,6 @@ the early out rejects, each evaluated ``REPS`` times in a row (its data in cache
 branches predicted), numba and C.
 """
 
-import statistics
 import time
 
 import numpy as np
@@ -20,6 +19,7 @@ import numpy as np
 from pdfem.kernels.contact import C_ACTIVE, NNOD, NRES, contact_pass
 from pdfem.kernels.contact_law import NPAR
 from pdfem.kernels.overlap import outside_edge
+from pdfem.tools.bench.timing import median_call
 
 # Evaluations of one pair in the single-pair timing, and calls timed
 REPS = 2000
@@ -31,17 +31,6 @@ def _outputs(rows):
     return (np.zeros(rows, np.int8), np.zeros((rows, 4), np.int64), np.zeros((rows, 2), np.int64),
             np.zeros((rows, NNOD), np.int64), np.zeros((rows, NNOD)), np.zeros((rows, NNOD, 2)),
             np.zeros(rows), np.zeros((rows, NRES)))
-
-
-def _cpu_median(fn, args, calls):
-    """Median process-time seconds of fn(*args) over calls calls (one untimed first)."""
-    fn(*args)
-    times = []
-    for _ in range(calls):
-        t0 = time.process_time()
-        fn(*args)
-        times.append(time.process_time() - t0)
-    return statistics.median(times)
 
 
 def _one_pair(sim, eff, pair, law, nmat, walls, dt, cfn):
@@ -65,8 +54,8 @@ def _one_pair(sim, eff, pair, law, nmat, walls, dt, cfn):
     args = common + (np.zeros(0, np.int64),) + walls + (reps, hkey, hval, np.zeros(0), False,
                                                         False, dt, bbox, np.zeros((0, 2)), 0)
     cargs = common + walls + (reps, hkey, hval, dt, bbox)
-    return {"numba": _cpu_median(contact_pass, args + o, CALLS) / REPS,
-            "c": _cpu_median(cfn, cargs + o, CALLS) / REPS}
+    return {"numba": median_call(contact_pass, args + o, CALLS, time.process_time) / REPS,
+            "c": median_call(cfn, cargs + o, CALLS, time.process_time) / REPS}
 
 
 def pass_yardstick(sim, repeat):
@@ -106,9 +95,10 @@ def pass_yardstick(sim, repeat):
                                                            strict=True))
     out = {"candidates": cand.shape[0], "evaluated": nev, "contacts": n, "same": same,
            "unsupported": got["c"][3],
-           "numba": _cpu_median(contact_pass, numba_args(cand, s.hkey, s.hval) + outs["numba"],
-                                repeat),
-           "c": _cpu_median(cfn, c_args(cand, s.hkey, s.hval) + outs["c"], repeat)}
+           "numba": median_call(contact_pass, numba_args(cand, s.hkey, s.hval) + outs["numba"],
+                                repeat, time.process_time),
+           "c": median_call(cfn, c_args(cand, s.hkey, s.hval) + outs["c"], repeat,
+                            time.process_time)}
     # One pair on its own: the first overlapping pair, and the first pair whose boxes overlap
     # that the early out rejects (A wholly outside an edge line of B)
     act = outs["numba"][0][:n]

@@ -37,6 +37,7 @@ from pdfem.kernels.contact_step import (
     first_guarded,
     max_speed,
 )
+from pdfem.kernels.grain_depth import element_depths
 from pdfem.kernels.heat import (
     accumulate_element_heat_sorted,
     contact_heat,
@@ -122,8 +123,13 @@ class Contact(Effect):
         self.heat_h = float(r["contact_conductance"]["h"]) if "contact_conductance" in r else 0.0
         self.heat_fraction = (float(r["friction_heating"]["fraction"])
                               if "friction_heating" in r else 0.0)
-        # Candidate element pairs: found at each rebuild, merged with the blocks' each step
-        self.detect = Candidates(self._wall_p0, self._wall_n)
+        # Candidate element pairs: found at each rebuild, merged with the blocks' each step;
+        # with the potential law also the pairs of a boundary element and any element of the
+        # other body (grain_depth)
+        self.deep = bool((self.law[:, :, L.P_LAW] == L.LAW_POTENTIAL).any())
+        self.detect = Candidates(self._wall_p0, self._wall_n, self.deep)
+        # The potential law's values at the elements' corners and centroids (after_rebuild)
+        self.depth = (np.zeros((0, 4)), np.zeros(0))
         self._rows = 0
         self._outputs(1024)
         self._boxes = np.empty((0, 4))
@@ -139,7 +145,13 @@ class Contact(Effect):
 
     # ------------------------------------------------------------------ detection
     def after_rebuild(self, st, ctx):
-        """The candidates of the rebuilt store (pdfem.effects.contact_candidates)."""
+        """The candidates of the rebuilt store (pdfem.effects.contact_candidates) and the
+        potential law's field over its bodies (pdfem.kernels.grain_depth)."""
+        s = st.store
+        edep, eapex = np.zeros((s.nelem, 4)), np.zeros(s.nelem)
+        if self.deep:
+            element_depths(s.conn, s.ebnd, s.elen, s.estart, s.ne, s.nstart, s.nn, edep, eapex)
+        self.depth = (edep, eapex)
         self.detect.rebuild(st, ctx)
 
     @property
@@ -182,7 +194,8 @@ class Contact(Effect):
         while True:
             out = self._outputs(self._rows)
             n, _, nev = contact_pass(s.x, st.du, s.m, s.conn, s.ebnd, s.elem_gid, s.elem_loc,
-                                       s.elen, s.emat, self.law.reshape(-1, L.NPAR),
+                                       s.elen, *self.depth, s.emat,
+                                       self.law.reshape(-1, L.NPAR),
                                        self.law.shape[0], NO_ROWS, self._wall_p0, self._wall_n,
                                        self._wall_mu, cand, s.hkey, s.hval, NO_HISTORY, False,
                                        False, dt, self._bbox(s.nelem), forces, s.nn_own,

@@ -63,10 +63,14 @@ def lexorder(keys):
 
 class Candidates:
     """The candidates of one rank: built at each rebuild (:meth:`rebuild`), merged with the
-    blocks' each step (:meth:`step`); walls given by their points and inward normals."""
+    blocks' each step (:meth:`step`); walls given by their points and inward normals; with
+    deep, element pairs reach past the boundary elements (:func:`candidate_pairs`)."""
 
-    def __init__(self, wall_p0, wall_n):
+    def __init__(self, wall_p0, wall_n, deep=False):
         self._wall_p0, self._wall_n = wall_p0, wall_n
+        # The pairs of a boundary element and any element of the other body too (the
+        # potential law: pdfem.kernels.grain_depth)
+        self.deep = deep
         self.gpairs = np.zeros((0, 2), np.int64)
         self.cand = np.zeros((0, 2), np.int64)
         self._out = np.zeros((1024, 2), np.int64)
@@ -109,12 +113,13 @@ class Candidates:
         return np.concatenate(parts).astype(np.int64)
 
     def _element_pairs(self, st, ctx, bbox, bpairs, reach):
-        """Boundary-element pairs of the candidate bodies whose boxes are within reach."""
+        """Boundary-element pairs of the candidate bodies whose boxes are within reach (with
+        deep, a boundary element and any element of the other body)."""
         s = st.store
         e0, e1 = s.estart, s.estart + s.ne
         while True:
             n = candidate_pairs(bbox, s.ebnd, s.elem_gid, s.elem_loc, e0, e1, bpairs, reach,
-                                self._out)
+                                self.deep, self._out)
             if n <= self._out.shape[0]:
                 return self._out[:n].copy()
             self._out = np.zeros((2 * n, 2), np.int64)

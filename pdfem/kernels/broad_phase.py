@@ -90,25 +90,27 @@ def _rows_near(a, i, b, j, skin):
 
 
 @njit(cache=True)
-def _near_list(bbox, ebnd, e0, e1, boxes, b, skin, lst):
-    """Boundary elements of [e0, e1) within skin of boxes[b], into lst; return their count."""
+def _near_list(bbox, ebnd, e0, e1, boxes, b, skin, deep, lst):
+    """Boundary elements (with deep, all elements) of [e0, e1) within skin of boxes[b], into
+    lst; return their count."""
     c = 0
     for e in range(e0, e1):
-        if _on_boundary(ebnd, e) and _rows_near(bbox, e, boxes, b, skin):
+        if (deep or _on_boundary(ebnd, e)) and _rows_near(bbox, e, boxes, b, skin):
             lst[c] = e
             c += 1
     return c
 
 
 @njit(cache=True)
-def _body_box(bbox, ebnd, e0, e1, box):
-    """Union of the bboxes of the boundary elements of [e0, e1) into box."""
+def _body_box(bbox, ebnd, e0, e1, deep, box):
+    """Union of the bboxes of the boundary elements (with deep, all elements) of [e0, e1) into
+    box."""
     box[0] = np.inf
     box[1] = np.inf
     box[2] = -np.inf
     box[3] = -np.inf
     for e in range(e0, e1):
-        if _on_boundary(ebnd, e):
+        if deep or _on_boundary(ebnd, e):
             box[0] = min(box[0], bbox[e, 0])
             box[1] = min(box[1], bbox[e, 1])
             box[2] = max(box[2], bbox[e, 2])
@@ -116,11 +118,13 @@ def _body_box(bbox, ebnd, e0, e1, box):
 
 
 @njit(cache=True)
-def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, out):
+def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, deep, out):
     """Boundary-element pairs of the candidate body pairs bpairs (nb, 2) whose bboxes are within
-    skin (boxes_near). Body i owns elements [body_e0[i], body_e1[i]). Pairs come out in body-pair
-    order, then element order, oriented lower global key first, into out (cap, 2); returns the
-    number found (only the first cap are written). Same set as pairs_from_bboxes.
+    skin (boxes_near); with deep, the pairs of a boundary element of either body and any
+    element of the other. Body i owns elements [body_e0[i], body_e1[i]). Pairs come out in
+    body-pair order, then element order, oriented lower global key first, into out (cap, 2);
+    returns the number found (only the first cap are written). Without deep, the same set as
+    pairs_from_bboxes.
     """
     big = 1
     for q in range(bpairs.shape[0]):
@@ -131,7 +135,7 @@ def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, out)
     # Bounding box of each body's boundary elements (empty box when it has none), once
     boxes = np.empty((body_e0.shape[0], 4))
     for i in range(body_e0.shape[0]):
-        _body_box(bbox, ebnd, body_e0[i], body_e1[i], boxes[i])
+        _body_box(bbox, ebnd, body_e0[i], body_e1[i], deep, boxes[i])
     n = 0
     for q in range(bpairs.shape[0]):
         i = bpairs[q, 0]
@@ -143,10 +147,13 @@ def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, out)
         if egid[body_e0[i]] > egid[body_e0[j]]:
             i, j = j, i
         # Boundary elements of each body near the other body, then all their pairs
-        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], boxes, j, skin, la)
-        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], boxes, i, skin, lb)
+        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], boxes, j, skin, deep, la)
+        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], boxes, i, skin, deep, lb)
         for u in range(na):
+            bu = not deep or _on_boundary(ebnd, la[u])
             for v in range(nb):
+                if not bu and not _on_boundary(ebnd, lb[v]):
+                    continue
                 if _rows_near(bbox, la[u], bbox, lb[v], skin):
                     n = _emit(out, n, la[u], lb[v], egid, eloc)
     return n

@@ -1,8 +1,12 @@
 """Element-to-element and element-to-wall contact forces (report sec. 5, figs. 4-7).
 
-A contact is a pair of boundary elements of two different bodies. The kernels compute, for every
-candidate pair, the overlap polygon, the contact frame and the forces of the law in
-contact_law.py on the nodes of both elements. They never add into the global force array:
+A contact is a pair of boundary elements of two different bodies; under the potential law
+(contact_potential) also a boundary element and an element inside the other body (no boundary
+edge, contact length 0), a pair that carries the normal force only: the pair's length is the
+boundary element's, it holds no shear and conducts no heat (width 0), and the contact point's
+weights lie on the inside element's nearest edge. The kernels compute, for every candidate
+pair, the overlap polygon, the contact frame and the forces of the law in contact_law.py on the
+nodes of both elements. They never add into the global force array:
 ``contact_step.accumulate_sorted`` does that, in an order the caller chooses (contacts sorted by
 global key), so that a node's force is the same sum on any number of ranks.
 
@@ -158,7 +162,8 @@ def _clear(r, us_keep, code, active, nodes, weights, fnod, us_out, res):
 
 
 @njit(cache=True)
-def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, wall_p0, wall_n,
+def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex, emat, law, nmat, lrow,
+                 wall_p0, wall_n,
                  wall_mu, cand, hkey, hval, us_in, dense, general, dt, bbox, fc, n_owned, active,
                  keys, elems, nodes, weights, fnod, us_out, res):
     """Evaluate the candidate contacts cand (nc, 2): element pairs (a, b) of different bodies and
@@ -167,9 +172,11 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
     x, du (nn, 2): positions and displacement increments of the step (du / dt is the velocity
     the normal damping sees; dt = 0: none); m (nn,) lumped masses; conn (ne, 4) int64 CCW;
     ebnd (ne, 4) int8 boundary-edge flags; egid, eloc (ne,) int64 global element key; elen
-    (ne,) contact lengths. The law of a candidate is the row law[lrow[c]] of law (nrow, NPAR)
-    (contact_law.P_*), or with lrow empty the row emat[a] * nmat + emat[b] of the material
-    pair (emat (ne,) element materials; a wall: the element's material with itself); a wall's
+    (ne,) contact lengths; edep (ne, 4), eapex (ne,) the potential law's values at the
+    elements' corners and centroids (grain_depth.element_depths). The law of a candidate is
+    the row law[lrow[c]] of law (nrow, NPAR) (contact_law.P_*), or with lrow empty the row
+    emat[a] * nmat + emat[b] of the material pair (emat (ne,) element materials; a wall: the
+    element's material with itself); a wall's
     friction is wall_mu[w]. Wall w is the half-plane {p : n.(p - p0) < 0}, p0 = wall_p0[w], n =
     wall_n[w] its unit normal out of the wall into the domain. The shear history is us_in[c],
     or with us_in empty the value of the candidate's key in the sorted table hkey (nh, 4),
@@ -234,6 +241,12 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
         else:
             near = (bbox[a, 0] - bbox[b, 2] <= 0.0 and bbox[b, 0] - bbox[a, 2] <= 0.0
                     and bbox[a, 1] - bbox[b, 3] <= 0.0 and bbox[b, 1] - bbox[a, 3] <= 0.0)
+        # The law of the pair (contact_law); a pair with an element inside its body (no
+        # boundary edge, elen 0) is a contact of the potential law only (grain_depth)
+        lr = (lrow[c] if by_row else emat[a] * nmat + (emat[a] if wall else emat[b]))
+        deep = not wall and not (elen[a] > 0.0 and elen[b] > 0.0)
+        if deep and law[lr, P_LAW] == 0.0:
+            near = False
         r = c if dense else min(q, last)
         if not near:
             if dense:
@@ -267,7 +280,7 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                 lo, hi = overlap_extent(px, py, 0, kw, -ny, nx, px[0, 0], py[0, 0], 0.0, 0.0)
                 width = hi - lo
         else:
-            length = min(elen[a], elen[b])
+            length = max(elen[a], elen[b]) if deep else min(elen[a], elen[b])
             # Is B strictly convex, every corner turning left? (contact_frame.is_convex)
             convex = True
             for k in range(4):
@@ -456,8 +469,6 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                         lo = min(lo, f)
                         hi = max(hi, f)
                     width = hi - lo
-        # The law of the pair (contact_law)
-        lr = (lrow[c] if by_row else emat[a] * nmat + (emat[a] if wall else emat[b]))
         if law[lr, P_LAW] != 0.0 and (st == OV_OK or st == OV_INSIDE):
             # The potential law: W, the equivalent area sqrt(W L) and its gradient replace
             # the overlap area and dA/dx (contact_potential)
@@ -465,7 +476,8 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                 wpot = wall_potential(xa, 0.5 * elen[a], wall_p0[w, 0], wall_p0[w, 1], wnx, wny,
                                       qx, qy, qt, qtri, g)
             else:
-                wpot = pair_potential(xa, xb, 0.5 * elen[a], 0.5 * elen[b], qx, qy, qt, qtri, g)
+                wpot = pair_potential(xa, xb, edep[a], eapex[a], edep[b], eapex[b], qx, qy, qt,
+                                      qtri, g)
             # The equivalent area; a rounding-level one is no contact, as for the area law
             area = np.sqrt(wpot * length) if wpot > 0.0 and length > 0.0 else 0.0
             if not area > SLIVER * bbox_scale2(xa):
@@ -535,7 +547,7 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
         else:
             best = np.inf
             for k in range(4):
-                if ebnd[a, k] == 0:
+                if ebnd[a, k] == 0 and elen[a] > 0.0:
                     continue
                 k1 = (k + 1) % 4
                 dx = xa[k1, 0] - xa[k, 0]
@@ -551,7 +563,7 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
                     sa = f
             best = np.inf
             for k in range(0 if wall else 4):
-                if ebnd[b, k] == 0:
+                if ebnd[b, k] == 0 and elen[b] > 0.0:
                     continue
                 k1 = (k + 1) % 4
                 dx = xb[k1, 0] - xb[k, 0]
@@ -636,7 +648,14 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, emat, law, nmat, lrow, 
         fn = -t * max(gax * nx + gay * ny, 0.0)
         tx = -ny
         ty = nx
-        us_new, fs, diss = shear_update(us, rux * tx + ruy * ty, length, ks, mu, fn)
+        if deep:
+            # An element inside its body holds no shear, and the pair conducts no heat: the
+            # grains' friction and conduction act through their boundary elements' pairs
+            ks = 0.0
+            width = 0.0
+            us_new, fs, diss = 0.0, 0.0, 0.0
+        else:
+            us_new, fs, diss = shear_update(us, rux * tx + ruy * ty, length, ks, mu, fn)
         # Nodal forces -t dA/dx plus the shear at the contact point (+ on A, - on B), in the
         # caller's order (flip: the caller's A is our B)
         j = 4 if flip else 0
@@ -681,18 +700,27 @@ def _dense_rows(n):
     return np.empty((n, 4), np.int64), np.empty((n, 2), np.int64)
 
 
+def element_potentials(elen):
+    """Corner and centroid values (edep, eapex) of elements that are each a body of their own:
+    zero at the corners, half the contact length at the centroid (grain_depth)."""
+    return np.zeros((elen.shape[0], 4)), 0.5 * np.asarray(elen, float)
+
+
 def element_pair_forces(x, du, conn, ebnd, egid, eloc, elen, pairs, params, us_in, active, nodes,
-                        weights, fnod, us_out, res, m, dt):
+                        weights, fnod, us_out, res, m, dt, depth=None):
     """Contact forces of the element pairs pairs (np, 2) (elements of different bodies), one
     output row per pair (contact_pass; C_NONE where they do not touch).
 
-    params (np, NPAR) law parameters (contact_law.P_*); us_in (np,) shear history; the other
-    inputs and the outputs as contact_pass. Returns the number of guarded contacts.
+    params (np, NPAR) law parameters (contact_law.P_*); us_in (np,) shear history; depth the
+    potential law's (edep, eapex) (default: element_potentials); the other inputs and the
+    outputs as contact_pass. Returns the number of guarded contacts.
     """
     n = pairs.shape[0]
     keys, elems = _dense_rows(n)
     none = np.zeros((0, 2))
-    return contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, np.zeros(0, np.int64), params, 0,
+    edep, eapex = element_potentials(elen) if depth is None else depth
+    return contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex,
+                        np.zeros(0, np.int64), params, 0,
                         np.arange(n), none, none, np.zeros(0), pairs.astype(np.int64),
                         np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,
                         np.empty((conn.shape[0], 4)), np.zeros((0, 2)), 0, active, keys,
@@ -712,7 +740,9 @@ def element_wall_forces(x, du, conn, ebnd, elen, elems, wall_p0, wall_n, params,
     keys, rows = _dense_rows(n)
     cand = np.stack([elems.astype(np.int64), -1 - np.arange(n)], axis=1)
     ids = np.zeros(conn.shape[0], np.int64)
-    return contact_pass(x, du, m, conn, ebnd, ids, ids, elen, ids, params, 0, np.arange(n),
+    edep, eapex = element_potentials(elen)
+    return contact_pass(x, du, m, conn, ebnd, ids, ids, elen, edep, eapex, ids, params, 0,
+                        np.arange(n),
                         np.ascontiguousarray(wall_p0, float), np.ascontiguousarray(wall_n, float),
                         np.ascontiguousarray(params[:, P_MU]), cand,
                         np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,

@@ -8,16 +8,22 @@ integral of a potential over it, as the combined finite-discrete element method 
 
     W = int_{A cap B} (psi_A + psi_B) dx                                  [m^3 per m]
 
-psi_E, the potential of element E, is zero on E's boundary and h_E = elen_E / 2 at its
-centroid c_E (the mean of its corners), linear on each of the four triangles (corner k,
-corner k+1, c_E). For a square of side s it is exactly the distance to the nearest edge.
-Against a wall, the wall's potential is the depth behind its line:
+psi_E, the potential over element E, is the field of E's body (grain_depth): linear on each of
+E's four triangles (corner k, corner k+1, centroid c_E, the corners' mean), with the values
+d_k at the corners (the corners' depth below the body's boundary, zero on it) and h_E at the
+centroid. An element that is a body of its own (all corners on its boundary) has psi zero on
+its edges and h_E = elen_E / 2 at its centroid: for a square of side s exactly the distance to
+the nearest edge. A body's elements carry its depth, so a node that crosses the boundary
+elements into the inside elements keeps meeting a potential that rises towards the body's
+middle; the pairs of a boundary element with any element of the other body are candidates.
+Against a wall, the element's own potential (zero at its corners) and the wall's, the depth
+behind its line:
 
     W = int_{A cap H} (psi_A + d) dx,     d(x) = -n . (x - p0)  (H: behind the wall).
 
-Deep inside another element psi of the host still rises towards its centre, and behind a wall d
-rises without bound, so W grows and dW/dx is nonzero at any penetration short of the exact
-symmetric overlap of two coincident elements.
+Behind a wall d rises without bound, and inside a body psi rises towards its middle, so W
+grows and dW/dx is nonzero at any penetration short of the exact symmetric overlap of two
+coincident elements, or an element centred on a body's deepest point.
 
 The law of contact_law then acts on the mean overlap delta = sqrt(W / L), with L the pair's
 length (contact.py). Two squares of side s pressed together over a whole edge by d have
@@ -30,11 +36,14 @@ gradient of an energy, and do no work beyond its change.
 dW/dx is exact. For one term I = int_{S cap T} psi_T (S an element, T a triangle of the other
 element Q):
 - moving Q's nodes changes the field at a fixed point: with barycentric coordinates lambda_j
-  of T's vertices p_j (v0, v1, c_Q), psi_T = h lambda_c and d lambda_c / d p_j = -lambda_j
-  grad lambda_c; c_Q is the mean of Q's corners, so each corner takes a quarter of c_Q's part.
-  The integrand is linear, so the integral is the clipped polygon's area times its value at the
-  polygon's centroid. The domain's edges on Q's outer edges carry psi = 0, and those on the
-  triangles' inner edges cancel between neighbours (the same psi and the same motion);
+  of T's vertices p_j (v0, v1, c_Q), psi_T = sum_j v_j lambda_j and d psi_T / d p_j =
+  -lambda_j grad psi_T; c_Q is the mean of Q's corners, so each corner takes a quarter of c_Q's
+  part. The integrand is linear, so the integral is the clipped polygon's area times its value
+  at the polygon's centroid;
+- moving Q's nodes also sweeps the domain's edges that lie on Q's outer edges, which carry
+  psi_T (nonzero where Q's corners lie inside their body): node i of the edge (i, i+1) gets
+  int psi_T N_i n ds. The domain's edges on the triangles' inner edges cancel between
+  neighbours (the same psi and the same motion);
 - moving S's nodes sweeps the domain along the polygon's edges on S's boundary: node i of the
   edge (i, i+1) gets int psi_T N_i n ds, psi_T and the hat N_i both linear along the edge.
 Triangles of non-positive orientation (a corner pushed past the element's centroid) hold no
@@ -84,16 +93,19 @@ def apex_coordinate(tri, d2, x, y):
 
 
 @njit(cache=True)
-def field_gradient(tri, d2, k, h, area, cx, cy, g, rq):
+def field_gradient(tri, d2, k, v0, v1, vc, area, cx, cy, g, rq):
     """Add to g rows rq..rq+3 the derivative of int psi_T over a polygon of this area and
     centroid (cx, cy) with respect to the nodes of the quad whose triangle k tri is (the field
-    moving under a fixed polygon). Returns lambda_c at the centroid."""
+    moving under a fixed polygon); psi_T takes the values v0, v1, vc at tri's vertices (corner
+    k, corner k + 1, centroid). Returns psi_T at the centroid."""
+    # Barycentric coordinates at the centroid
     lc = apex_coordinate(tri, d2, cx, cy)
     l0 = ((tri[1, 0] - cx) * (tri[2, 1] - cy) - (tri[1, 1] - cy) * (tri[2, 0] - cx)) / d2
     l1 = 1.0 - l0 - lc
-    # grad lambda_c, scaled by -h area
-    gx = -(tri[1, 1] - tri[0, 1]) / d2 * (-h * area)
-    gy = (tri[1, 0] - tri[0, 0]) / d2 * (-h * area)
+    # grad psi_T = sum_i v_i grad lambda_i, scaled by -area
+    fx, fy, _ = linear_field(tri, d2, v0, v1, vc)
+    gx = -area * fx
+    gy = -area * fy
     k1 = k + 1 if k + 1 < 4 else 0
     g[rq + k, 0] += l0 * gx
     g[rq + k, 1] += l0 * gy
@@ -103,7 +115,26 @@ def field_gradient(tri, d2, k, h, area, cx, cy, g, rq):
     for m in range(4):
         g[rq + m, 0] += 0.25 * lc * gx
         g[rq + m, 1] += 0.25 * lc * gy
-    return lc
+    return v0 * l0 + v1 * l1 + vc * lc
+
+
+@njit(cache=True)
+def linear_field(tri, d2, v0, v1, vc):
+    """(fx, fy, f0) of the linear field f0 + fx x + fy y taking the values v0, v1, vc at the
+    vertices of tri (d2 twice its area)."""
+    fx = 0.0
+    fy = 0.0
+    f0 = 0.0
+    for i, v in ((0, v0), (1, v1), (2, vc)):
+        if v == 0.0:
+            continue
+        j = i + 1 if i < 2 else 0
+        m = j + 1 if j < 2 else 0
+        # lambda_i = (x_j y_m - x_m y_j + (y_j - y_m) x + (x_m - x_j) y) / d2
+        fx += v * (tri[j, 1] - tri[m, 1]) / d2
+        fy += v * (tri[m, 0] - tri[j, 0]) / d2
+        f0 += v * (tri[j, 0] * tri[m, 1] - tri[m, 0] * tri[j, 1]) / d2
+    return fx, fy, f0
 
 
 @njit(cache=True)
@@ -178,22 +209,28 @@ def neighbour_bits(k):
 def retag_subject_edges(pt, n):
     """Tags of a triangle clipped as the subject by a half-plane (slot 0, n vertices): its
     edge i becomes clip line i (T_SRC = -1 - i) and the half-plane's line -4, as clip_into
-    tags a subject clipped by the triangle, for inner_edge_gradient."""
+    tags a subject clipped by the triangle, for host_edge_gradient."""
     for i in range(n):
         src = pt[0, i, T_SRC]
         pt[0, i, T_SRC] = -1 - src if src >= 0 else -4
 
 
 @njit(cache=True)
-def inner_edge_gradient(tri, k, folded, px, py, pt, n, fx, fy, f0, fz, g, rq):
-    """Add to g rows rq..rq+3 the sweep of the polygon in slot 0 along the inner edges of the
-    host's triangle k (tri; clip line 1: corner k + 1 -> centroid, 2: centroid -> corner k)
-    whose neighbour across is folded (bits of folded_triangles); the field is
-    fz (f0 + fx x + fy y). The centroid's share goes a quarter to each corner."""
+def host_edge_gradient(tri, k, folded, outer, px, py, pt, n, fx, fy, f0, fz, g, rq):
+    """Add to g rows rq..rq+3 the sweep of the polygon in slot 0 along the host's edges that
+    carry a potential no neighbour cancels: the inner edges of the host's triangle k (tri;
+    clip line 1: corner k + 1 -> centroid, 2: centroid -> corner k) whose neighbour across is
+    folded (bits of folded_triangles), and with outer its outer edge (clip line 0: corner k ->
+    corner k + 1). The field is fz (f0 + fx x + fy y); the centroid's share goes a quarter to
+    each corner."""
     k1 = (k + 1) & 3
     for i in range(n):
         line = -1 - pt[0, i, T_SRC]
-        if line == 1:
+        if line == 0:
+            if not outer:
+                continue
+            a, b = 0, 1
+        elif line == 1:
             if not folded & (1 << k1):
                 continue
             a, b = 1, 2
@@ -222,10 +259,11 @@ def inner_edge_gradient(tri, k, folded, px, py, pt, n, fx, fy, f0, fz, g, rq):
 
 
 @njit(cache=True)
-def side_potential(xs, xq, hq, px, py, pt, tri, g, rs, rq):
-    """int over S cap Q of psi_Q (S = xs, Q = xq, both (4, 2) CCW; psi_Q's peak hq), its
-    gradient added to g: S's nodes in rows rs..rs+3, Q's in rows rq..rq+3. px, py, pt: clip
-    buffers (slots 0 and 1 are used); tri (3, 2) scratch. Returns the integral (>= 0)."""
+def side_potential(xs, xq, dq, cq, px, py, pt, tri, g, rs, rq):
+    """int over S cap Q of psi_Q (S = xs, Q = xq, both (4, 2) CCW; psi_Q takes the values dq
+    (4,) at Q's corners and cq at its centroid), its gradient added to g: S's nodes in rows
+    rs..rs+3, Q's in rows rq..rq+3. px, py, pt: clip buffers (slots 0 and 1 are used); tri
+    (3, 2) scratch. Returns the integral (>= 0)."""
     w = 0.0
     folded = folded_triangles(xq, tri)
     for k in range(4):
@@ -238,34 +276,36 @@ def side_potential(xs, xq, hq, px, py, pt, tri, g, rs, rq):
         area, cx, cy = polygon_area_centroid(px, py, 0, n)
         if not area > 0.0:
             continue
-        lc = field_gradient(tri, d2, k, hq, area, cx, cy, g, rq)
-        w += area * hq * lc
-        # psi_T = hq lambda_c, linear: lambda_c = (e_x (y - y0) - e_y (x - x0)) / d2
-        ex = tri[1, 0] - tri[0, 0]
-        ey = tri[1, 1] - tri[0, 1]
-        fx, fy, f0 = -ey / d2, ex / d2, (ey * tri[0, 0] - ex * tri[0, 1]) / d2
-        sweep_gradient(xs, px, py, pt, n, fx, fy, f0, hq, g, rs)
-        # The inner edges whose neighbour holds no potential (clip lines 1 and 2 of tri)
-        if folded & neighbour_bits(k):
-            inner_edge_gradient(tri, k, folded, px, py, pt, n, fx, fy, f0, hq, g, rq)
+        k1 = k + 1 if k + 1 < 4 else 0
+        w += area * field_gradient(tri, d2, k, dq[k], dq[k1], cq, area, cx, cy, g, rq)
+        # psi_T, linear on the triangle: S's edges sweep it
+        fx, fy, f0 = linear_field(tri, d2, dq[k], dq[k1], cq)
+        sweep_gradient(xs, px, py, pt, n, fx, fy, f0, 1.0, g, rs)
+        # Q's edges carrying a potential no neighbour of the pair cancels: the outer edge
+        # where its corners hold one, the inner edges next to a folded triangle
+        outer = dq[k] != 0.0 or dq[k1] != 0.0
+        if outer or folded & neighbour_bits(k):
+            host_edge_gradient(tri, k, folded, outer, px, py, pt, n, fx, fy, f0, 1.0, g, rq)
     return w
 
 
 @njit(cache=True)
-def pair_potential(xa, xb, ha, hb, px, py, pt, tri, g):
-    """W of elements A (xa) and B (xb) with potential peaks ha and hb; g (8, 2) is zeroed and
-    receives dW/dx (A's nodes rows 0-3, B's rows 4-7). Returns W."""
+def pair_potential(xa, xb, da, ca, db, cb, px, py, pt, tri, g):
+    """W of elements A (xa) and B (xb) with potentials of corner values da, db (4,) and centroid
+    values ca, cb; g (8, 2) is zeroed and receives dW/dx (A's nodes rows 0-3, B's rows 4-7).
+    Returns W."""
     for r in range(8):
         g[r, 0] = 0.0
         g[r, 1] = 0.0
-    w = side_potential(xa, xb, hb, px, py, pt, tri, g, ROW_A, ROW_B)
-    return w + side_potential(xb, xa, ha, px, py, pt, tri, g, ROW_B, ROW_A)
+    w = side_potential(xa, xb, db, cb, px, py, pt, tri, g, ROW_A, ROW_B)
+    return w + side_potential(xb, xa, da, ca, px, py, pt, tri, g, ROW_B, ROW_A)
 
 
 @njit(cache=True)
 def wall_potential(xa, ha, p0x, p0y, nx, ny, px, py, pt, tri, g):
-    """W of element A (xa, potential peak ha) and the wall {p : n.(p - p0) < 0} (n its unit
-    normal into the domain); g (8, 2) is zeroed and receives dW/dx in rows 0-3. Returns W."""
+    """W of element A (xa, its own potential zero at its corners and ha at its centroid) and
+    the wall {p : n.(p - p0) < 0} (n its unit normal into the domain); g (8, 2) is zeroed and
+    receives dW/dx in rows 0-3. Returns W."""
     for r in range(8):
         g[r, 0] = 0.0
         g[r, 1] = 0.0
@@ -284,15 +324,13 @@ def wall_potential(xa, ha, p0x, p0y, nx, ny, px, py, pt, tri, g):
         area, cx, cy = polygon_area_centroid(px, py, 0, n)
         if not area > 0.0:
             continue
-        w += area * ha * field_gradient(tri, d2, k, ha, area, cx, cy, g, ROW_A)
+        w += area * field_gradient(tri, d2, k, 0.0, 0.0, ha, area, cx, cy, g, ROW_A)
         # The inner edges whose neighbour holds no potential: here the polygon's edges keep
         # the subject's tags (the triangle's edge i), not clip-line tags
         if folded & neighbour_bits(k):
-            ex = tri[1, 0] - tri[0, 0]
-            ey = tri[1, 1] - tri[0, 1]
+            fx, fy, f0 = linear_field(tri, d2, 0.0, 0.0, ha)
             retag_subject_edges(pt, n)
-            inner_edge_gradient(tri, k, folded, px, py, pt, n, -ey / d2, ex / d2,
-                                (ey * tri[0, 0] - ex * tri[0, 1]) / d2, ha, g, ROW_A)
+            host_edge_gradient(tri, k, folded, False, px, py, pt, n, fx, fy, f0, 1.0, g, ROW_A)
     # The wall's depth over the part of A behind it (A's edges sweep it)
     load_subject(xa, 4, px, py, pt, 1)
     n = clip_halfplane(px, py, pt, 1, 4, p0x, p0y, nx, ny, 0, 0)

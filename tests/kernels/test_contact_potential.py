@@ -12,6 +12,8 @@ from tests.kernels.contact_helpers import SQ, random_quad
 from tests.kernels.test_contact import law_params, outputs, run_pairs, two_elements
 
 KN0 = 1e9
+# Corner values of an element that is a body of its own
+ZERO4 = np.zeros(4)
 DMAX = 0.5
 
 
@@ -21,7 +23,7 @@ def buffers():
 
 def pair_w(x, ha, hb):
     px, py, pt, tri, g = buffers()
-    return P.pair_potential(x[:4], x[4:], ha, hb, px, py, pt, tri, g), g
+    return P.pair_potential(x[:4], x[4:], ZERO4, ha, ZERO4, hb, px, py, pt, tri, g), g
 
 
 def wall_w(xa, ha, p0, n):
@@ -281,3 +283,116 @@ def test_rounding_level_potential_is_no_contact():
     ebnd = np.array([[0, 1, 1, 0], [0, 1, 0, 0]], np.int8)
     act = energy_and_forces(x, conn, ebnd, egid, eloc, elen, L.LAW_POTENTIAL)[0]
     assert act[0] == C.C_NONE
+
+
+# ---- the body's potential: corner values, and a grain pushed into another's inside ----
+
+
+def test_pair_gradient_is_exact_with_corner_values():
+    # Potentials that hold values at the corners (a body's depth field, grain_depth): the
+    # host's outer edges then carry the field, and their sweep is part of the gradient
+    rng = np.random.default_rng(31)
+    px, py, pt, tri, g = buffers()
+    checked = 0
+    while checked < 40:
+        x = np.vstack([random_quad(rng, spread=0.3), random_quad(rng, spread=0.3)])
+        da, db = rng.uniform(0.0, 1.0, 4), rng.uniform(0.0, 1.0, 4)
+        da[rng.integers(4)] = 0.0
+        ca, cb = 0.25 * da.sum() + 0.1, 0.25 * db.sum()
+
+        def w_of(y, da=da, db=db, ca=ca, cb=cb):
+            return P.pair_potential(y[:4], y[4:], da, ca, db, cb, px, py, pt, tri, g)
+
+        w = w_of(x)
+        if w <= 1e-6:
+            continue
+        grad = g.copy()
+        fd = fd_gradient(w_of, x)
+        assert np.abs(fd - grad).max() <= 1e-6 * np.abs(grad).max()
+        assert np.abs(grad.sum(0)).max() <= 1e-12 * np.abs(grad).max()
+        checked += 1
+
+
+def grid_grain(n, side=1.0):
+    """A square grain of n x n unit quads (CCW), its boundary flags and contact lengths."""
+    from pdfem.build import boundary_flags, contact_lengths
+
+    i, j = np.meshgrid(np.arange(n + 1), np.arange(n + 1), indexing="ij")
+    x = side * np.stack([i.ravel(), j.ravel()], axis=1).astype(float)
+    nid = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+    conn = np.array([[nid[a, b], nid[a + 1, b], nid[a + 1, b + 1], nid[a, b + 1]]
+                     for a in range(n) for b in range(n)], np.int64)
+    ebnd = boundary_flags(conn)
+    return x, conn, ebnd, contact_lengths(x, conn, ebnd)
+
+
+def test_grain_depth_layers_of_a_square_grain():
+    from pdfem.kernels.grain_depth import element_depths
+
+    x, conn, ebnd, elen = grid_grain(3)
+    edep, eapex = np.full((9, 4), -1.0), np.full(9, -1.0)
+    element_depths(conn, ebnd, elen, np.array([0]), np.array([9]), np.array([0]),
+                   np.array([16]), edep, eapex)
+    # The 12 boundary nodes at depth 0, the 4 inner ones one layer (the unit elen = 1) in
+    inner = np.all((x > 0.5) & (x < 2.5), axis=1)
+    depth = np.zeros(16)
+    depth[inner] = 1.0
+    assert np.array_equal(edep, depth[conn])
+    # Centroids: half an element below the shallowest corner (the centre element: 1.5, its
+    # centroid's distance to the boundary) or the corners' mean, whichever is larger
+    centre = int(np.flatnonzero(np.all(ebnd == 0, axis=1))[0])
+    assert eapex[centre] == 1.5
+    assert np.all(eapex[np.arange(9) != centre] == 0.5)
+
+
+def grain_and_square(dy, depth):
+    """A 3 x 3 grain (body 0, side 1) and a square of side 0.4 (body 1) whose lower edge lies
+    dy below the grain's top, over the middle column; the contact of every element of the
+    grain with the square: (total energy, force on the square, active codes)."""
+    from pdfem.kernels.grain_depth import element_depths
+
+    xg, cg, eg, lg = grid_grain(3)
+    xs = SQ * 0.4 + [1.3, 3.0 - dy]
+    x = np.vstack([xg, xs])
+    conn = np.vstack([cg, [[16, 17, 18, 19]]]).astype(np.int64)
+    ebnd = np.vstack([eg, [[1, 1, 1, 1]]]).astype(np.int8)
+    elen = np.r_[lg, 0.4]
+    egid = np.r_[np.zeros(9, np.int64), 1]
+    eloc = np.r_[np.arange(9), 0].astype(np.int64)
+    edep, eapex = np.zeros((10, 4)), 0.5 * elen
+    if depth:
+        element_depths(conn, ebnd, elen, np.array([0, 9]), np.array([9, 1]),
+                       np.array([0, 16]), np.array([16, 4]), edep, eapex)
+    pairs = np.array([[e, 9] for e in range(9)], np.int64)
+    out = outputs(9)
+    C.element_pair_forces(x, np.zeros_like(x), conn, ebnd, egid, eloc, elen, pairs,
+                          law_params(9, kn0=KN0, dmax=10.0, law=L.LAW_POTENTIAL), np.zeros(9),
+                          *out, np.ones(len(x)), 0.0, depth=(edep, eapex))
+    act, _, _, fnod, _, res = out
+    return res[:, C.R_ENERGY].sum(), fnod[:, 4:].sum(axis=(0, 1)), act
+
+
+def test_grain_pushed_into_another_is_repelled_at_every_depth():
+    # The square pushed down through the grain's top boundary element into its centre element
+    # and on towards the grain's middle (y = 1.5): the energy rises all the way, the force on
+    # the square points back out (+y) and is the energy's gradient (central differences)
+    last = 0.0
+    for dy in (0.1, 0.5, 0.9, 1.2, 1.45, 1.6):
+        e, f, act = grain_and_square(dy, True)
+        assert e > last
+        assert f[1] > 0.0 and abs(f[0]) <= 1e-9 * f[1]
+        h = 1e-7
+        de = (grain_and_square(dy + h, True)[0] - grain_and_square(dy - h, True)[0]) / (2 * h)
+        assert f[1] == pytest.approx(de, rel=1e-6)
+        last = e
+        if dy == 1.45:
+            # Wholly inside the grain's centre element: its pair is one of the contacts
+            assert act[4] == C.C_ACTIVE
+    # Centred on the grain's middle it is pushed nowhere; past it, out through the nearer side
+    e, f, _ = grain_and_square(1.7, True)
+    assert e > last and abs(f[1]) <= 1e-12 * last
+    assert grain_and_square(2.0, True)[1][1] < 0.0
+    # With each element's own potential (zero on its edges, none in an element without a
+    # contact length), the square inside the centre element is pushed nowhere
+    e, f, _ = grain_and_square(1.45, False)
+    assert e == 0.0 and not f.any()

@@ -197,7 +197,8 @@ def test_candidate_pairs_equal_brute_force():
     bp[::2] = bp[::2, ::-1]
     cand = np.zeros((n + 5, 2), np.int64)
     assert (
-        BP.candidate_pairs(bbox, ebnd, egid, eloc, np.array(e0), np.array(e1), bp, skin, cand) == n
+        BP.candidate_pairs(bbox, ebnd, egid, eloc, np.array(e0), np.array(e1), bp, skin, False,
+                           cand) == n
     )
     cand = cand[:n]
     assert {tuple(p) for p in brute} == {tuple(p) for p in cand}
@@ -216,3 +217,12 @@ def test_candidate_pairs_equal_brute_force():
             if egid[i] < egid[j] and ebnd[i].any() and ebnd[j].any():
                 if O.quad_overlap(x[conn[i]], x[conn[j]], *buf)[0] != O.OV_NONE:
                     assert (i, j) in cset
+    # deep (the potential law): also a boundary element with any element of the other body,
+    # exactly the pairs of elements of two bodies, one on its boundary, within skin
+    deep = np.zeros((4 * n + 5, 2), np.int64)
+    nd = BP.candidate_pairs(bbox, ebnd, egid, eloc, np.array(e0), np.array(e1), bp, skin, True,
+                            deep)
+    want = {(i, j) for i in range(ne) for j in range(ne)
+            if egid[i] < egid[j] and (ebnd[i].any() or ebnd[j].any())
+            and BP.boxes_near(bbox[i], bbox[j], skin)}
+    assert nd > n and {tuple(p) for p in deep[:nd]} == want

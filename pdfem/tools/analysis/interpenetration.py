@@ -1,11 +1,13 @@
 """Grains that have passed into each other.
 
-Contacts act between the grains' boundary elements (the candidates of
-pdfem.effects.contact_candidates), and the potential law's repulsion grows with depth only within
-them. A node of one grain that has crossed another grain's boundary elements into its interior
-elements feels no contact: the grains overlap there unopposed, the bed holds more grain than its
-volume, and its density is not one the grains' own compression allows. The count of such nodes
-is what tells it; a node inside another grain's boundary element is ordinary contact overlap.
+A node of one grain inside another grain's boundary element is ordinary contact overlap. Past
+the boundary elements, inside a grain's interior elements, it is overlap the contact law should
+have stopped: under the report's area law (and any law acting between boundary elements only)
+such a node feels no contact at all, the grains overlap there unopposed and the bed holds more
+grain than its volume; under the potential law the grain's depth field
+(pdfem.kernels.grain_depth) still pushes it back, ever harder, and a node found there marks a
+contact pressed to more than a boundary element's depth. The count of such nodes is what tells
+either.
 """
 
 import numpy as np

@@ -295,7 +295,8 @@ def report_text(s):
         + f"; grain nodes inside another grain's interior elements at the end "
           f"{_f(m['interpenetrated_end'], 100, '.2f')} %"
         + ("" if not m["interpenetrated_end"] > 0.0 else
-           " (grains passed into each other where no contact acts: the answer is not the bed's)"),
+           " (contacts pressed past the other grain's boundary elements; under the area law "
+           "nothing opposes them there and the answer is not the bed's)"),
         f"compaction strain (centre of mass): peak {_f(c['peak'], 1, '.3f')} at "
         f"{_f(c['t_peak'], 1e6, '.2f')} us, final {_f(c['final'], 1, '.3f')} at "
         f"{_f(c['t_final'], 1e6, '.2f')} us ({_f(c['kept'], 100, '.0f')} % of the peak kept); "

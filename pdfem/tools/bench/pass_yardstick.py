@@ -51,8 +51,9 @@ def _one_pair(sim, eff, pair, law, nmat, walls, dt, cfn):
     reps = np.ascontiguousarray(np.tile([0, 1], (REPS, 1)).astype(np.int64))
     bbox = np.empty((2, 4))
     o = _outputs(REPS + 1)
-    args = common + (np.zeros(0, np.int64),) + walls + (reps, hkey, hval, np.zeros(0), False,
-                                                        False, dt, bbox, np.zeros((0, 2)), 0)
+    depth = tuple(np.ascontiguousarray(d[e]) for d in eff.depth)
+    args = (common[:8] + depth + common[8:] + (np.zeros(0, np.int64),) + walls
+            + (reps, hkey, hval, np.zeros(0), False, False, dt, bbox, np.zeros((0, 2)), 0))
     cargs = common + walls + (reps, hkey, hval, dt, bbox)
     return {"numba": median_call(contact_pass, args + o, CALLS, time.process_time) / REPS,
             "c": median_call(cfn, cargs + o, CALLS, time.process_time) / REPS}
@@ -78,9 +79,8 @@ def pass_yardstick(sim, repeat):
     bbox = np.empty((s.nelem, 4))
 
     def numba_args(cands, hkey, hval):
-        return common + (np.zeros(0, np.int64),) + walls + (cands, hkey, hval, np.zeros(0),
-                                                             False, False, dt, bbox,
-                                                             np.zeros((0, 2)), 0)
+        return (common[:8] + eff.depth + common[8:] + (np.zeros(0, np.int64),) + walls
+                + (cands, hkey, hval, np.zeros(0), False, False, dt, bbox, np.zeros((0, 2)), 0))
 
     def c_args(cands, hkey, hval):
         return common + walls + (cands, hkey, hval, dt, bbox)

@@ -1,5 +1,5 @@
 """The ring grain mesh through the command line: a packaged bed re-meshed onto rings, a
-hammer at 1500 m/s that folds kite elements within 30 ns and no ring element in 60 ns; with
+hammer at 1500 m/s that folds kite elements within 100 ns and no ring element in 200 ns; with
 the crystal's equation of state the same bits on 1 and 2 ranks; a prepare scene that asks
 for rings is refused with one line."""
 
@@ -10,15 +10,15 @@ from tests.helpers import datasets, pdfem, same_bits_on_one_and_two_ranks
 from tests.scenes import packaged, small_prepare, write_scene
 
 
-def _fast(out, mesh, eos=False):
-    """The small shot-912 piston at 1500 m/s for 0.1 us on level-1 meshes, frames every 10 ns;
+def _fast(out, mesh, eos=False, end=1.0e-7):
+    """The small shot-912 piston at 1500 m/s to ``end`` on level-1 meshes, frames every 10 ns;
     eos: the grains' crystal on its Us-up Hugoniot (s = 2.29)."""
     doc = packaged("shot912_small.toml")
     v = 1500.0
     for b in doc["blocks"] + doc["bc"]:
         if "velocity" in b:
             b["velocity"] = [0.0, -v]
-    doc["time"]["end"] = 1.0e-7
+    doc["time"]["end"] = end
     doc["element"] = {"rule": "2x2", "level": 1, "mesh": mesh}
     doc["output"] = {"path": out, "interval": 1.0e-8, "energy_interval": 1.0e-8}
     if eos:
@@ -38,7 +38,7 @@ def _folded(a):
 
 def test_ring_mesh_folds_later_than_kites(tmp_path):
     for mesh in ("ring", "kite"):
-        write_scene(tmp_path / f"{mesh}.toml", _fast(f"{mesh}.h5", mesh))
+        write_scene(tmp_path / f"{mesh}.toml", _fast(f"{mesh}.h5", mesh, end=2.0e-7))
         p = pdfem(["run", f"{mesh}.toml", "--quiet"], tmp_path)
         assert p.returncode == 0, p.stderr
     ring, kite = datasets(tmp_path / "ring.h5"), datasets(tmp_path / "kite.h5")
@@ -46,9 +46,10 @@ def test_ring_mesh_folds_later_than_kites(tmp_path):
     grains = np.nonzero(ring["mesh/body_kind"] == 0)[0]
     assert grains.shape[0] == 29
     assert np.all(np.bincount(ring["mesh/elem_body"])[grains] == 18)
-    # No corner folds in the first 60 ns; on kite meshes one has folded by 30 ns
-    assert _folded(ring)[:7].max() == 0
-    assert _folded(kite)[:4].max() > 0
+    # No corner folds in the first 200 ns; on kite meshes one has folded by 100 ns (by 30 ns
+    # when the potential law's field was each element's own)
+    assert _folded(ring).max() == 0
+    assert _folded(kite)[:11].max() > 0
 
 
 def test_fast_ring_run_with_eos_same_bits_on_one_and_two_ranks(tmp_path):

@@ -57,15 +57,13 @@ def read_run(path):
 def run_default_job(log):
     """Run the default scene on 2 ranks in a scratch folder (a child mpirun, its own output
     discarded); return read_run of its summary, or None (said) when it cannot."""
-    from pdfem.tools.bench.suite import mpirun_command
+    from pdfem.tools.bench.suite import child_mpi_env, mpirun_command
 
     cmd = mpirun_command(2)
     if cmd is None:
         log("bench job: no mpirun on PATH, the default job not run")
         return None
-    # This process is an MPI singleton: its MPI variables must not reach the child mpirun
-    env = {k: v for k, v in os.environ.items()
-           if not k.startswith(("OMPI_MCA_", "OMPI_COMM", "OMPI_FILE", "PMIX_", "PMI_"))}
+    env = child_mpi_env()
     with tempfile.TemporaryDirectory() as folder:
         p = subprocess.run(cmd + [sys.executable, "-m", "pdfem", "run", "-o", "job.h5",
                                   "--quiet"], cwd=folder, capture_output=True, text=True,

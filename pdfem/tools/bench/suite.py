@@ -44,6 +44,13 @@ def mpirun_command(n):
     return cmd
 
 
+def child_mpi_env():
+    """This process's environment without its MPI variables: it may be an MPI singleton, whose
+    variables must not reach a child mpirun."""
+    return {k: v for k, v in os.environ.items()
+            if not k.startswith(("OMPI_MCA_", "OMPI_COMM", "OMPI_FILE", "PMIX_", "PMI_"))}
+
+
 def _parallel(per_rank, repeat, log):
     """The parallel figures from a child mpirun of 2 ranks (its output relayed), or None."""
     cmd = mpirun_command(2)
@@ -52,9 +59,7 @@ def _parallel(per_rank, repeat, log):
         return None
     with tempfile.TemporaryDirectory() as folder:
         out = os.path.join(folder, "parallel.json")
-        # This process is an MPI singleton: its MPI variables must not reach the child mpirun
-        env = {k: v for k, v in os.environ.items()
-               if not k.startswith(("OMPI_MCA_", "OMPI_COMM", "OMPI_FILE", "PMIX_", "PMI_"))}
+        env = child_mpi_env()
         p = subprocess.run(cmd + [sys.executable, "-m", "pdfem", "bench", "parallel",
                                   "--per-rank", str(per_rank), "--repeat", str(repeat),
                                   "--json", out], capture_output=True, text=True, env=env)

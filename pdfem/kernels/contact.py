@@ -163,9 +163,8 @@ def _clear(r, us_keep, code, active, nodes, weights, fnod, us_out, res):
 
 @njit(cache=True)
 def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex, emat, law, nmat, lrow,
-                 wall_p0, wall_n,
-                 wall_mu, cand, hkey, hval, us_in, dense, general, dt, bbox, fc, n_owned, active,
-                 keys, elems, nodes, weights, fnod, us_out, res):
+                 wall_p0, wall_n, wall_mu, cand, hkey, hval, us_in, dense, general, dt, bbox, fc,
+                 n_owned, active, keys, elems, nodes, weights, fnod, us_out, res):
     """Evaluate the candidate contacts cand (nc, 2): element pairs (a, b) of different bodies and
     element-wall pairs (e, -1 - w).
 
@@ -176,9 +175,9 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex, emat, law,
     elements' corners and centroids (grain_depth.element_depths). The law of a candidate is
     the row law[lrow[c]] of law (nrow, NPAR) (contact_law.P_*), or with lrow empty the row
     emat[a] * nmat + emat[b] of the material pair (emat (ne,) element materials; a wall: the
-    element's material with itself); a wall's
-    friction is wall_mu[w]. Wall w is the half-plane {p : n.(p - p0) < 0}, p0 = wall_p0[w], n =
-    wall_n[w] its unit normal out of the wall into the domain. The shear history is us_in[c],
+    element's material with itself); a wall's friction is wall_mu[w]. Wall w is the half-plane
+    {p : n.(p - p0) < 0}, p0 = wall_p0[w], n = wall_n[w] its unit normal out of the wall into
+    the domain. The shear history is us_in[c],
     or with us_in empty the value of the candidate's key in the sorted table hkey (nh, 4),
     hval (nh,) (0 if absent; the candidates must then be sorted by key: a merge).
 
@@ -720,8 +719,8 @@ def element_pair_forces(x, du, conn, ebnd, egid, eloc, elen, pairs, params, us_i
     none = np.zeros((0, 2))
     edep, eapex = element_potentials(elen) if depth is None else depth
     return contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex,
-                        np.zeros(0, np.int64), params, 0,
-                        np.arange(n), none, none, np.zeros(0), pairs.astype(np.int64),
+                        np.zeros(0, np.int64), params, 0, np.arange(n), none, none,
+                        np.zeros(0), pairs.astype(np.int64),
                         np.zeros((0, 4), np.int64), np.zeros(0), us_in, True, False, dt,
                         np.empty((conn.shape[0], 4)), np.zeros((0, 2)), 0, active, keys,
                         elems, nodes, weights, fnod, us_out, res)[1]

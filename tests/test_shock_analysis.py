@@ -378,3 +378,27 @@ def test_nodes_inside_another_grains_interior_elements():
     # Moved out of the centre element, nothing is inside
     x[16] = [0.5, 2.5]
     assert not nodes_inside_interiors(x, conn_all, elem_body, node_body).any()
+
+
+def test_escape_depths_beyond_the_anvil_the_hammer_and_the_sides():
+    """The farthest excursion of the grain nodes past each confine, over the frames, and the
+    frame where it is; negative when a grain never got there; the reach of a scene's contact
+    is the largest delta_max of its table and pairs."""
+    from pdfem.tools.analysis.escape import contact_reach, escape_depths
+
+    box = [0.0, 0.0, 1.0, 4.0]
+    bottom = np.array([1.5, 0.9, 0.7])
+    top = np.array([3.0, 3.2, 2.9])
+    xr = np.array([[0.1, 0.9], [-0.05, 0.95], [0.0, 1.2]])
+    anvil = np.array([1.0, 1.0, 0.95])
+    hammer = np.array([3.5, 3.1, 2.8])
+    e = escape_depths(bottom, top, xr, anvil, hammer, box)
+    assert e["below_anvil"] == pytest.approx(0.25) and e["below_anvil_frame"] == 2
+    assert e["above_hammer"] == pytest.approx(0.1) and e["above_hammer_frame"] == 1
+    assert e["past_sides"] == pytest.approx(0.2) and e["past_sides_frame"] == 2
+    e = escape_depths(bottom[:1], top[:1], xr[:1], anvil[:1], hammer[:1], box)
+    assert e["below_anvil"] == pytest.approx(-0.5) and e["above_hammer"] == pytest.approx(-0.5)
+    assert e["past_sides"] == pytest.approx(-0.1)
+    assert contact_reach({}) == 0.0
+    assert contact_reach({"contact": {"delta_max": 3e-5, "pairs": {"a:b": {"delta_max": 5e-5},
+                                                                  "a:c": {"kn0": 1.0}}}}) == 5e-5

@@ -68,6 +68,8 @@ class Run:
     hammer_vy: np.ndarray
     anvil_y: np.ndarray
     grain_top: np.ndarray
+    grain_bottom: np.ndarray
+    grain_xrange: np.ndarray
     hammer_mean_vy: np.ndarray
     hammer_mass: float
     grain_top0: float
@@ -119,11 +121,13 @@ def _finite(a, name, k, path):
 
 def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, gconn, path):
     """Per frame: grain centroid y and v_y, hammer face y and v_y, anvil face y, the
-    whole hammer's mass-weighted mean y and v_y, the highest grain node, and the folded
-    corners' area of the grain elements gconn over their area at frame 0."""
+    whole hammer's mass-weighted mean y and v_y, the highest and lowest grain node, the grain
+    nodes' x range (nf, 2), and the folded corners' area of the grain elements gconn over
+    their area at frame 0."""
     nf = fr["time"].shape[0]
     gy, gvy = np.zeros((nf, ng)), np.zeros((nf, ng))
-    hy, hvy, ay, my, mvy, top, folded = (np.zeros(nf) for _ in range(7))
+    hy, hvy, ay, my, mvy, top, bottom, folded = (np.zeros(nf) for _ in range(8))
+    xrange = np.zeros((nf, 2))
     wh = node_mass[hall] / node_mass[hall].sum()
     gmask = node_body < ng
     nb_g, w = node_body[gmask], node_mass[gmask]
@@ -132,7 +136,8 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, gconn, pat
     for k in range(nf):
         x = _finite(fr["x"][k], "x", k, path)
         gy[k] = body_means(x[gmask, 1], w, nb_g, ng)
-        top[k] = x[gmask, 1].max()
+        top[k], bottom[k] = x[gmask, 1].max(), x[gmask, 1].min()
+        xrange[k] = x[gmask, 0].min(), x[gmask, 0].max()
         hy[k], ay[k], my[k] = x[hammer, 1].mean(), x[anvil, 1].mean(), wh @ x[hall, 1]
         folded[k] = folded_area(x, gconn).sum()
         if has_v:
@@ -144,7 +149,7 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, gconn, pat
     if not has_v and nf > 1:
         gvy, hvy, mvy = np.gradient(gy, t, axis=0), np.gradient(hy, t), np.gradient(my, t)
     folded /= element_areas(fr["x"][0], gconn).sum()
-    return t, gy, gvy, hy, hvy, ay, mvy, top, folded
+    return t, gy, gvy, hy, hvy, ay, mvy, top, bottom, xrange, folded
 
 
 def _drive(scene, hammer):
@@ -209,7 +214,7 @@ def _read(f, path, scene, shock):
     shock.setdefault("solid_density", float(scene["materials"][gmat]["density"]))
     hammer, _, hall = _block_rows(scene, ng, node_body, shock["hammer"], path)
     _, anvil, _ = _block_rows(scene, ng, node_body, shock["anvil"], path)
-    t, gy, gvy, hy, hvy, ay, mvy, top, folded = _reduce_frames(
+    t, gy, gvy, hy, hvy, ay, mvy, top, bottom, xrange, folded = _reduce_frames(
         f["frames"], node_mass, node_body, ng, hammer, anvil, hall, conn[elem_body < ng], path)
     # Gauge series: every group under /gauges but the time axis
     gauges = {n: {"velocity": g["velocity"][:], "stress": g["stress"][:],
@@ -226,6 +231,7 @@ def _read(f, path, scene, shock):
                grain_mass=grain_mass, grain_diam=np.sqrt(4.0 * garea / np.pi),
                grain_material=gmat, hammer_nodes=hammer, anvil_nodes=anvil, time=t,
                grain_y=gy, grain_vy=gvy, hammer_y=hy, hammer_vy=hvy, anvil_y=ay, grain_top=top,
+               grain_bottom=bottom, grain_xrange=xrange,
                hammer_mean_vy=mvy, hammer_mass=float(node_mass[hall].sum()),
                grain_top0=float(x0[node_body < ng, 1].max()), gauge_time=f["gauges/time"][:],
                gauges=gauges, drive=_drive(scene, shock["hammer"]), energy=energy,

@@ -11,6 +11,7 @@ import numpy as np
 
 from pdfem.tools.analysis import compaction as cp
 from pdfem.tools.analysis import front as fr
+from pdfem.tools.analysis.escape import contact_reach, escape_depths
 from pdfem.tools.analysis.interpenetration import nodes_inside_interiors
 from pdfem.tools.analysis.runfile import read_run
 
@@ -21,6 +22,18 @@ FIGURE_SUFFIXES = ("-snapshots.png", "-gauges.png", "-xt.png", "-hugoniot.png")
 # Share of the grains' area in folded corners above which the summary calls the meshes
 # folded over themselves (2 x 2 runs at 1-2 km/s stay below 0.1 %)
 FOLDED_LIMIT = 0.01
+
+
+def _escape_line(e):
+    """The text line of the summary's mesh.escape."""
+    line = (f"grain nodes at most {_f(e['below_anvil'], 1e6, '.1f')} um below the anvil's "
+            f"face and {_f(e['above_hammer'], 1e6, '.1f')} um above the hammer's (contact "
+            f"overlap reaches {_f(e['reach'], 1e6, '.1f')} um), "
+            f"{_f(e['past_sides'], 1e6, '.1f')} um past the box's sides")
+    if e["escaped"]:
+        line += (f": grain material has gone past the anvil or the hammer by "
+                 f"{_f(e['t_escaped'], 1e6, '.3f')} us and the answer is not the bed's")
+    return line
 
 
 def output_files(prefix, plots="png", thermal=False):
@@ -136,6 +149,15 @@ def compute(run):
     inside = nodes_inside_interiors(run.frame(len(run.time) - 1)[0], run.conn[gsel],
                                     run.elem_body[gsel], run.node_body)
     interp = float(inside.sum()) / max(1, int(np.count_nonzero(run.node_body < run.ng)))
+    # Grain nodes farther beyond the anvil, the hammer or the box's sides than contact reaches
+    # (pdfem.tools.analysis.escape)
+    esc = escape_depths(run.grain_bottom, run.grain_top, run.grain_xrange, run.anvil_y,
+                        run.hammer_y, run.scene["domain"]["box"])
+    reach = contact_reach(run.scene)
+    escaped = {k: esc[k] for k in ("below_anvil", "above_hammer", "past_sides")}
+    far = max(("below_anvil", "above_hammer"), key=escaped.get)
+    escaped.update(reach=reach, escaped=escaped[far] > reach,
+                   t_escaped=float(run.time[esc[far + "_frame"]]))
     comp = cp.compaction(t, run.grain_y, run.grain_mass, run.anvil_y, run.hammer_y,
                          run.grain_top, H0)
     # The whole bed's Hugoniot from the faces: a driven (rigid) hammer's face stress is the
@@ -191,7 +213,8 @@ def compute(run):
                      "us_at_impact_speed": snow0["us"]},
         "bound": {**bound, "sigma": mom["sigma"]},
         "mesh": {"folded_front": float(np.max(folded)), "folded_end": float(run.folded[-1]),
-                 "folded_max": float(np.max(run.folded)), "interpenetrated_end": interp},
+                 "folded_max": float(np.max(run.folded)), "interpenetrated_end": interp,
+                 "escape": escaped},
         "compaction": {k: comp[k] for k in ("peak", "t_peak", "final", "t_final", "kept",
                                             "peak_height", "final_height")},
         "gauges": {"hammer_peak": float(np.max(hcomp)) if hcomp.size else NAN,
@@ -297,6 +320,7 @@ def report_text(s):
         + ("" if not m["interpenetrated_end"] > 0.0 else
            " (contacts pressed past the other grain's boundary elements; under the area law "
            "nothing opposes them there and the answer is not the bed's)"),
+        _escape_line(m["escape"]),
         f"compaction strain (centre of mass): peak {_f(c['peak'], 1, '.3f')} at "
         f"{_f(c['t_peak'], 1e6, '.2f')} us, final {_f(c['final'], 1, '.3f')} at "
         f"{_f(c['t_final'], 1e6, '.2f')} us ({_f(c['kept'], 100, '.0f')} % of the peak kept); "

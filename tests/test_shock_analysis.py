@@ -384,7 +384,7 @@ def test_escape_depths_beyond_the_anvil_the_hammer_and_the_sides():
     """The farthest excursion of the grain nodes past each confine, over the frames, and the
     frame where it is; negative when a grain never got there; the reach of a scene's contact
     is the largest delta_max of its table and pairs."""
-    from pdfem.tools.analysis.escape import contact_reach, escape_depths
+    from pdfem.tools.analysis.escape import contact_reach, escape_depths, escaped_mass
 
     box = [0.0, 0.0, 1.0, 4.0]
     bottom = np.array([1.5, 0.9, 0.7])
@@ -400,5 +400,12 @@ def test_escape_depths_beyond_the_anvil_the_hammer_and_the_sides():
     assert e["below_anvil"] == pytest.approx(-0.5) and e["above_hammer"] == pytest.approx(-0.5)
     assert e["past_sides"] == pytest.approx(-0.1)
     assert contact_reach({}) == 0.0
+    # Two unit quads of masses 1 and 3; a node of the second past the anvil's face: 3/4
+    y = np.array([0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 1.0, 1.0])
+    gconn = np.array([[0, 1, 2, 3], [4, 5, 6, 7]])
+    y[5] = -0.5
+    assert escaped_mass(y, gconn, np.array([1.0, 3.0]), -0.1, 2.0) == 0.75
+    assert escaped_mass(y, gconn, np.array([1.0, 3.0]), -0.6, 2.0) == 0.0
+    assert escaped_mass(y, gconn, np.array([1.0, 3.0]), -0.6, 0.9) == 1.0
     assert contact_reach({"contact": {"delta_max": 3e-5, "pairs": {"a:b": {"delta_max": 5e-5},
                                                                   "a:c": {"kn0": 1.0}}}}) == 5e-5

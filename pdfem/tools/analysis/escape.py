@@ -33,3 +33,11 @@ def contact_reach(scene):
         return 0.0
     return max([float(c["delta_max"])] + [float(p["delta_max"]) for p in
                                           c.get("pairs", {}).values() if "delta_max" in p])
+
+
+def escaped_mass(y, gconn, gmass, below, above):
+    """Share of the grain mass gmass (NE,) in the grain elements gconn (NE, 4) with a node whose
+    height y (NN,) is under ``below`` or over ``above`` [m]: an upper bound on the grain mass
+    that has gone past the anvil's face (below) or the hammer's (above)."""
+    out = (y < below) | (y > above)
+    return float(gmass[out[gconn].any(axis=1)].sum() / gmass.sum())

@@ -16,6 +16,7 @@ import numpy as np
 from pdfem.errors import InputError
 from pdfem.io.runcheck import check_run_file
 from pdfem.mesh.quality import folded_area
+from pdfem.tools.analysis.escape import contact_reach, escaped_mass
 
 # Values of the [shock] keys when an older resolved scene lacks them
 SHOCK_DEFAULTS = {"front_fraction": 0.5, "precursor_fraction": 0.05, "steady_tolerance": 0.1,
@@ -70,6 +71,7 @@ class Run:
     grain_top: np.ndarray
     grain_bottom: np.ndarray
     grain_xrange: np.ndarray
+    escaped_mass: np.ndarray
     hammer_mean_vy: np.ndarray
     hammer_mass: float
     grain_top0: float
@@ -119,14 +121,15 @@ def _finite(a, name, k, path):
     return a
 
 
-def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, gconn, path):
+def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, gconn, gmass, reach, path):
     """Per frame: grain centroid y and v_y, hammer face y and v_y, anvil face y, the
     whole hammer's mass-weighted mean y and v_y, the highest and lowest grain node, the grain
-    nodes' x range (nf, 2), and the folded corners' area of the grain elements gconn over
-    their area at frame 0."""
+    nodes' x range (nf, 2), the folded corners' area of the grain elements gconn over their
+    area at frame 0, and the share of their mass gmass in elements with a node farther than
+    ``reach`` past the anvil's or the hammer's face (pdfem.tools.analysis.escape)."""
     nf = fr["time"].shape[0]
     gy, gvy = np.zeros((nf, ng)), np.zeros((nf, ng))
-    hy, hvy, ay, my, mvy, top, bottom, folded = (np.zeros(nf) for _ in range(8))
+    hy, hvy, ay, my, mvy, top, bottom, folded, lost = (np.zeros(nf) for _ in range(9))
     xrange = np.zeros((nf, 2))
     wh = node_mass[hall] / node_mass[hall].sum()
     gmask = node_body < ng
@@ -140,6 +143,7 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, gconn, pat
         xrange[k] = x[gmask, 0].min(), x[gmask, 0].max()
         hy[k], ay[k], my[k] = x[hammer, 1].mean(), x[anvil, 1].mean(), wh @ x[hall, 1]
         folded[k] = folded_area(x, gconn).sum()
+        lost[k] = escaped_mass(x[:, 1], gconn, gmass, ay[k] - reach, hy[k] + reach)
         if has_v:
             v = _finite(fr["v"][k], "v", k, path)
             gvy[k] = body_means(v[gmask, 1], w, nb_g, ng)
@@ -149,7 +153,7 @@ def _reduce_frames(fr, node_mass, node_body, ng, hammer, anvil, hall, gconn, pat
     if not has_v and nf > 1:
         gvy, hvy, mvy = np.gradient(gy, t, axis=0), np.gradient(hy, t), np.gradient(my, t)
     folded /= element_areas(fr["x"][0], gconn).sum()
-    return t, gy, gvy, hy, hvy, ay, mvy, top, bottom, xrange, folded
+    return t, gy, gvy, hy, hvy, ay, mvy, top, bottom, xrange, folded, lost
 
 
 def _drive(scene, hammer):
@@ -214,8 +218,10 @@ def _read(f, path, scene, shock):
     shock.setdefault("solid_density", float(scene["materials"][gmat]["density"]))
     hammer, _, hall = _block_rows(scene, ng, node_body, shock["hammer"], path)
     _, anvil, _ = _block_rows(scene, ng, node_body, shock["anvil"], path)
-    t, gy, gvy, hy, hvy, ay, mvy, top, bottom, xrange, folded = _reduce_frames(
-        f["frames"], node_mass, node_body, ng, hammer, anvil, hall, conn[elem_body < ng], path)
+    gsel = elem_body < ng
+    t, gy, gvy, hy, hvy, ay, mvy, top, bottom, xrange, folded, lost = _reduce_frames(
+        f["frames"], node_mass, node_body, ng, hammer, anvil, hall, conn[gsel],
+        elem_mass[gsel], contact_reach(scene), path)
     # Gauge series: every group under /gauges but the time axis
     gauges = {n: {"velocity": g["velocity"][:], "stress": g["stress"][:],
                   "force": g["force"][:] if "force" in g else None}
@@ -231,7 +237,7 @@ def _read(f, path, scene, shock):
                grain_mass=grain_mass, grain_diam=np.sqrt(4.0 * garea / np.pi),
                grain_material=gmat, hammer_nodes=hammer, anvil_nodes=anvil, time=t,
                grain_y=gy, grain_vy=gvy, hammer_y=hy, hammer_vy=hvy, anvil_y=ay, grain_top=top,
-               grain_bottom=bottom, grain_xrange=xrange,
+               grain_bottom=bottom, grain_xrange=xrange, escaped_mass=lost,
                hammer_mean_vy=mvy, hammer_mass=float(node_mass[hall].sum()),
                grain_top0=float(x0[node_body < ng, 1].max()), gauge_time=f["gauges/time"][:],
                gauges=gauges, drive=_drive(scene, shock["hammer"]), energy=energy,

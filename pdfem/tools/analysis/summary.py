@@ -31,8 +31,10 @@ def _escape_line(e):
             f"overlap reaches {_f(e['reach'], 1e6, '.1f')} um), "
             f"{_f(e['past_sides'], 1e6, '.1f')} um past the box's sides")
     if e["escaped"]:
-        line += (f": grain material has gone past the anvil or the hammer by "
-                 f"{_f(e['t_escaped'], 1e6, '.3f')} us and the answer is not the bed's")
+        line += (f": grain material has gone past the anvil or the hammer, at most "
+                 f"{_f(e['mass'], 100, '.3f')} % of the grains' mass in elements reaching past "
+                 f"(at {_f(e['t_mass'], 1e6, '.3f')} us; {_f(e['mass_end'], 100, '.3f')} % at the "
+                 "end), lost to the bed")
     return line
 
 
@@ -156,8 +158,11 @@ def compute(run):
     reach = contact_reach(run.scene)
     escaped = {k: esc[k] for k in ("below_anvil", "above_hammer", "past_sides")}
     far = max(("below_anvil", "above_hammer"), key=escaped.get)
+    k = int(np.argmax(run.escaped_mass))
     escaped.update(reach=reach, escaped=escaped[far] > reach,
-                   t_escaped=float(run.time[esc[far + "_frame"]]))
+                   t_escaped=float(run.time[esc[far + "_frame"]]),
+                   mass=float(run.escaped_mass[k]), t_mass=float(run.time[k]),
+                   mass_end=float(run.escaped_mass[-1]))
     comp = cp.compaction(t, run.grain_y, run.grain_mass, run.anvil_y, run.hammer_y,
                          run.grain_top, H0)
     # The whole bed's Hugoniot from the faces: a driven (rigid) hammer's face stress is the

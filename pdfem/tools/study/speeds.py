@@ -113,7 +113,7 @@ def row_of(rung, summary, wall_s, steps):
             "compaction": summary["compaction"]["final"], "folded": m["folded_max"],
             "interpenetrated": m["interpenetrated_end"],
             "escape": max(m["escape"]["below_anvil"], m["escape"]["above_hammer"]),
-            "escaped": m["escape"]["escaped"],
+            "escaped": m["escape"]["escaped"], "escaped_mass": m["escape"]["mass"],
             "momentum_closure": summary["jump"]["momentum_closure"]}
 
 
@@ -130,7 +130,7 @@ def table_lines(rows):
     """The printed table: one line per rung."""
     out = ["bed      rule level  V [m/s]  result           energy err  folded   Us [m/s]"
            "          up [m/s]  sigma [GPa]  rho1 (max) [kg/m3]  Us bound  bound   arrival "
-           "[us]  compaction  interpenetrated  escape [um]"]
+           "[us]  compaction  interpenetrated  escape [um] (grain mass past)"]
     for r in rows:
         head = f"{r['bed']:8s} {r['rule']:4s} {r['level']:5d}  {r['velocity']:7g}  "
         if not r["runs"]:
@@ -142,7 +142,8 @@ def table_lines(rows):
                    f"({r['rho1_max']:5.0f})    {r['us_min']:8.0f}  "
                    f"{'kept' if r['bound_kept'] else 'BROKEN':6s}  {r['arrival'] * 1e6:12.4f}  "
                    f"{r['compaction']:10.3f}  {_pct(r['interpenetrated']):>15s}  "
-                   f"{r['escape'] * 1e6:7.1f}{' ESCAPED' if r['escaped'] else ''}")
+                   f"{r['escape'] * 1e6:7.1f}"
+                   + (f" ({_pct(r['escaped_mass'], 3)}) ESCAPED" if r["escaped"] else ""))
     return out
 
 

@@ -149,7 +149,8 @@ def table_lines(rows):
 
 def run_rungs(rungs, folder, comm, log=print):
     """Run every rung (a list of (rung dict, checked scene)) on ``comm`` into ``folder`` and
-    analyse it on rank 0; the rows (rank 0; None elsewhere) and the number that stopped."""
+    analyse it on rank 0; the rows (rank 0; None elsewhere) and the number that stopped. A
+    rung stopped by SIGTERM or SIGUSR1 (its checkpoint written) ends the study there."""
     from pdfem.driver import run as drive
     from pdfem.errors import SimulationError
     from pdfem.solver import Simulation
@@ -170,6 +171,15 @@ def run_rungs(rungs, folder, comm, log=print):
                 rows.append(stopped_row(rung, str(exc)))
                 log(f"  stopped: {exc}")
             continue
+        if summary["stopped"]:
+            # Stopped by a signal: the run file is not finished and no rung after it starts
+            stops += 1
+            msg = (f"stopped by a signal at t={summary['time']:.6e} s (step {summary['steps']}); "
+                   f"its checkpoint is {summary['checkpoint']}; the rungs after it were not run")
+            if comm.rank == 0:
+                rows.append(stopped_row(rung, msg))
+                log(f"  {msg}")
+            break
         if comm.rank == 0:
             s = analyse(out, os.path.splitext(out)[0])
             rows.append(row_of(rung, s, summary["wall_s"], summary["steps"]))

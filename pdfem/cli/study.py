@@ -470,8 +470,8 @@ def _speeds(args):
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         lost = sum(1 for r in rows if r["runs"] and r["escaped"])
         print(f"pdfem study speeds: {len(rows) - stops} of {len(rows)} runs reach the scene's "
-              f"end" + (f", {lost} with grain material gone past the anvil or the hammer (their "
-                        "answers are not the bed's)" if lost else "")
+              f"end" + (f", {lost} with grain material gone past the anvil or the hammer (the "
+                        "column escape)" if lost else "")
               + f"; {args.prefix}.json, runs in {folder}/", flush=True)
     barrier(comm)
     return 3 if stops else 0

@@ -3,9 +3,10 @@
 A grain node in contact overlaps the anvil or the hammer by about the contact's delta_max (the
 law's pole) at most. A grain node found farther than that beyond the anvil's face (the mean
 height of its face nodes) or the hammer's has gone past it: through the block, or down the
-seam between the block and a side wall. The bed then holds less grain than it was given, and
-its answer is not the bed's. How far grain nodes got past the box's sides is given beside it:
-a contact wall lets a corner node in deeper than the mean overlap delta its law acts on.
+seam between the block and a side wall. The bed then holds less grain than it was given; the
+share of the grains' mass in elements reaching that far bounds how much. How far grain nodes
+got past the box's sides is given beside it: a contact wall lets a corner node in deeper than
+the mean overlap delta its law acts on.
 """
 
 import numpy as np

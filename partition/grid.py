@@ -1,7 +1,9 @@
 """Uniform cell grid over the domain box: contact-detection bins and decomposition units.
 
 Cell ``(ix, iy)`` has id ``ix + nx * iy``. Cells are at least ``cell_size`` wide, so two
-bodies closer than ``cell_size`` always lie in the same or in 8-neighbouring cells.
+bodies closer than ``cell_size`` always lie in the same or in 8-neighbouring cells. With
+periodic x the columns close on themselves: column ``nx - 1`` neighbours column 0, and a point
+beyond a side belongs to the cell of its image inside the box.
 """
 
 import math
@@ -16,7 +18,7 @@ class CellGrid:
     ``hx = width / nx`` and ``hy = height / ny`` are never below ``cell_size``.
     """
 
-    def __init__(self, box, cell_size):
+    def __init__(self, box, cell_size, periodic_x=False):
         # Validate and store the box
         xmin, ymin, xmax, ymax = (float(v) for v in box)
         if not (xmax > xmin and ymax > ymin):
@@ -31,21 +33,29 @@ class CellGrid:
         self.hx = (xmax - xmin) / self.nx
         self.hy = (ymax - ymin) / self.ny
         self.ncell = self.nx * self.ny
+        # The period in x [m] (0 when the sides are not periodic)
+        self.periodic_x = bool(periodic_x)
+        self.period = xmax - xmin if periodic_x else 0.0
 
     def __repr__(self):
         size = f"cell_size={self.cell_size!r}, nx={self.nx}, ny={self.ny}"
-        return f"CellGrid(box={self.box!r}, {size})"
+        periodic = ", periodic_x=True" if self.periodic_x else ""
+        return f"CellGrid(box={self.box!r}, {size}{periodic})"
 
     def cell_of(self, points):
         """Cell id (int64, shape (n,)) of each point of ``points`` (n, 2).
 
-        Points outside the box are clamped to the border cells.
+        Points outside the box are clamped to the border cells; with periodic x a point beyond
+        a side takes the column of its image (the column index modulo nx).
         """
-        # Column and row indices, clamped to the grid
+        # Column and row indices, clamped to the grid (wrapped in x when periodic)
         p = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         ix = np.floor((p[:, 0] - self.box[0]) / self.hx)
         iy = np.floor((p[:, 1] - self.box[1]) / self.hy)
-        ix = np.clip(ix, 0, self.nx - 1).astype(np.int64)
+        if self.periodic_x:
+            ix = np.mod(ix, self.nx).astype(np.int64)
+        else:
+            ix = np.clip(ix, 0, self.nx - 1).astype(np.int64)
         iy = np.clip(iy, 0, self.ny - 1).astype(np.int64)
         return ix + self.nx * iy
 

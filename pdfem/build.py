@@ -106,19 +106,48 @@ def grain_batch(fields, nip, nst, level, gids, center, axes, angle, velocity, ma
                   x.reshape(-1, 2), v.reshape(-1, 2), lconn, emat, ebnd)
 
 
-def block_batch(fields, nip, nst, blocks, gid0, mat_ids):
-    """Rectangular blocks (global bodies) meshed nx by ny, in scene order."""
+def block_batch(fields, nip, nst, blocks, gid0, mat_ids, periodic=False):
+    """Rectangular blocks (global bodies) meshed nx by ny, in scene order. With periodic
+    sides a block's left and right edges are a seam inside it, not a boundary (their node
+    columns move as one: :func:`tied_nodes`)."""
     parts, sets = [], []
     for i, blk in enumerate(blocks):
         x0, y0, x1, y1 = blk["box"]
-        xy, conn, _, node_sets = block_mesh(x0, y0, x1, y1, blk["nx"], blk["ny"])
+        nx = blk["nx"]
+        xy, conn, _, node_sets = block_mesh(x0, y0, x1, y1, nx, blk["ny"])
         v = np.tile(np.asarray(blk["velocity"], float), (xy.shape[0], 1))
         emat = np.full(conn.shape[0], mat_ids[blk["material"]])
+        ebnd = boundary_flags(conn)
+        if periodic:
+            # Edge 3 of the first column and edge 1 of the last are the seam
+            ebnd[0::nx, 3] = 0
+            ebnd[nx - 1::nx, 1] = 0
         parts.append(_batch(fields, nip, nst, np.array([gid0 + i]), np.array([xy.shape[0]]),
-                            np.array([conn.shape[0]]), 1, xy, v, conn, emat,
-                            boundary_flags(conn)))
+                            np.array([conn.shape[0]]), 1, xy, v, conn, emat, ebnd))
         sets.append(node_sets)
     return Batch.concat(fields, parts) if parts else Batch.empty(fields), sets
+
+
+def joint_masses(m, partner):
+    """The lumped masses m with each tied node's (partner >= 0, :func:`tied_nodes`) the sum of
+    the pair's, lower index first: the mass the pair moves with (m itself without ties)."""
+    tied = np.nonzero(partner >= 0)[0]
+    if not tied.size:
+        return m
+    out = m.copy()
+    lo, hi = np.minimum(tied, partner[tied]), np.maximum(tied, partner[tied])
+    out[tied] = m[lo] + m[hi]
+    return out
+
+
+def tied_nodes(block_sets, first, nn):
+    """Partner of each of the first nn nodes under periodic sides (int64, -1 = none): a
+    block's left and right node columns, row by row (block i's nodes from first[i])."""
+    partner = np.full(nn, -1, np.int64)
+    for sets, f in zip(block_sets, first, strict=True):
+        left, right = sets["left"] + f, sets["right"] + f
+        partner[left], partner[right] = right, left
+    return partner
 
 
 def _dof_mask(dof):

@@ -25,6 +25,8 @@ class Context:
         # Blocks (global bodies, stored first): their number, names and node sets
         self.nglobal = sim.nglobal
         self.block_names, self.block_sets = sim.block_names, sim.block_sets
+        # Periodic sides: the node each block node moves with (-1: none; pdfem.build.tied_nodes)
+        self.partner = sim.partner
         self.restarted = sim.restarted
         # The temperature field's owner (the heat effect; None without [heat])
         self.heat = sim.heat

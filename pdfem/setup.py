@@ -56,7 +56,8 @@ def initial_bodies(sim, scene, init_state):
         grains.a["x"] = g["nodes"][mine].reshape(-1, 2).copy()
         grains.a["v"] = g["node_v"][mine].reshape(-1, 2).copy()
     specs = r.get("blocks", [])
-    bbatch, bsets = build.block_batch(sim.fields, sim.nip, nst, specs, ng, sim.mat_ids)
+    bbatch, bsets = build.block_batch(sim.fields, sim.nip, nst, specs, ng, sim.mat_ids,
+                                      sim.grid.periodic_x)
     blocks = Blocks([b["name"] for b in specs], bsets)
     first = np.concatenate(([0], np.cumsum(bbatch.a["nn"])[:-1])).astype(np.int64)
     build.apply_bcs(bbatch, r.get("bc", []), sim.box, blocks.names, bsets, first)

@@ -96,7 +96,7 @@ class Simulation:
         self.no_eth = None if el["rule"] == "1pt" else NO_ETH
         dom, tm = r["domain"], r["time"]
         self.box = tuple(dom["box"])
-        self.grid = CellGrid(self.box, dom["cell_size"])
+        self.grid = CellGrid(self.box, dom["cell_size"], dom["periodic"] == "x")
         self.skin = dom["skin"]
         self.safety, self.t_end = tm["safety"], tm["end"]
         self.dt_max, self.dt_min, self.max_steps = tm["dt_max"], tm["dt_min"], tm["max_steps"]
@@ -113,6 +113,11 @@ class Simulation:
         # Set-up: the first state's bodies, from the scene or the checkpoint, on their owners
         store, self.owner, blocks = setup.initial_bodies(self, scene, init_state)
         self.block_names, self.block_sets, self.nglobal = blocks.names, blocks.sets, len(blocks)
+        # Periodic sides: each block's left and right node columns move as one
+        self.partner = np.zeros(0, np.int64)
+        if self.grid.periodic_x and self.nglobal:
+            self.partner = build.tied_nodes(blocks.sets, store.nstart[: self.nglobal],
+                                            store.nn_global)
         with self.timers.phase("migration"):
             store, self.halo = self.rebuild(store)
         self.checkpoint = None
@@ -266,7 +271,13 @@ class Simulation:
         """Migrate grains to their cells' owners and rebuild the ghosts of a ``store``, with
         the cell reach of its grains (collective); returns (store, halo). The reach is kept
         for the contact candidates (:func:`pdfem.parallel.exchange.cell_reach`)."""
-        self.reach = cell_reach(self.comm, store, self.grid, self.nglobal, self.skin)
+        self.reach, wide = cell_reach(self.comm, store, self.grid, self.nglobal, self.skin)
+        # Periodic sides: no grain may reach round the box to itself (a pair that meets
+        # through both sides is a failed check of the contact detection)
+        if self.grid.periodic_x and not wide + self.skin < self.grid.period:
+            raise SimulationError(f"a grain {wide:.4g} m wide with the skin {self.skin:.4g} m "
+                                  f"spans the box's width {self.grid.period:.4g} m: with "
+                                  "periodic sides it would meet itself; widen domain.box")
         return rebuild(self.comm, store, self.grid, self.owner, self.nglobal, self.reach)
 
     def _rebalance(self):
@@ -400,5 +411,6 @@ class Simulation:
             self.drives.apply(self, self.t, self.t + self.dt)
         with self.timers.phase("integration"):
             advance_velocities(s.v, self.f, s.m, s.bcf, s.bcv, self.gamma, dt_avg, s.nn_own,
-                               s.node_body, s.acc, self.kin[: s.nb_own], first, self.fc)
+                               s.node_body, s.acc, self.kin[: s.nb_own], first, self.fc,
+                               self.partner)
 

@@ -193,6 +193,41 @@ def shock_scene(bed, hammer_y0, width=6.0e-4, height=3.0e-3, end=6.0e-6, speed=2
     return doc
 
 
+def periodic_press(shift=0.0, end=6.0e-7, out="press.h5", vx=150.0):
+    """A strip with periodic sides, 1.2 mm wide: two rows of grains (some across the seam) on
+    a fixed bottom block, pressed by a hammer that moves down and sideways (its friction drags
+    the top grains across the seam). ``shift`` [m] moves the grains along x, their centres
+    wrapped into the box: with a whole number of block elements (0.2 mm) the same periodic
+    scene, cut at another place by the seam."""
+    w, r = 1.2e-3, 1.1e-4
+    grains = []
+    for row in range(2):
+        for col in range(4):
+            cx = ((col + 0.1 + 0.5 * row) * w / 4 + shift) % w
+            cy = 2.0e-4 + r + row * 2.05 * r
+            grains.append({"center": [cx, cy], "axes": [r, 0.8 * r], "angle": 0.3 * (col + row),
+                           "material": "hmx"})
+    top = 2.0e-4 + 4.1 * r + 2.0e-5
+    return {
+        "domain": {"box": [0.0, 0.0, w, 1.4e-3], "partition": "strips", "periodic": "x"},
+        "time": {"end": end},
+        "element": {"rule": "2x2", "level": 2},
+        "materials": shock_materials(),
+        "contact": {"kn0": 1.0e16, "delta_max": 3.0e-5, "friction": 0.3, "law": "potential"},
+        "bulk_viscosity": {},
+        "blocks": [{"name": "bottom", "box": [0.0, 0.0, w, 2.0e-4], "nx": 6,
+                    "material": "steel"},
+                   {"name": "hammer", "box": [0.0, top, w, top + 2.0e-4], "nx": 6,
+                    "material": "steel", "velocity": [vx, -300.0]}],
+        "bc": [{"body": "bottom", "nodes": "bottom", "type": "fixed"}],
+        "gauges": [{"name": "hammer", "body": "hammer", "side": "bottom"},
+                   {"name": "bottom", "body": "bottom", "side": "top"}],
+        "grains": grains,
+        "output": {"path": out, "interval": end / 4, "energy_interval": end / 20,
+                   "gauge_interval": end / 20},
+    }
+
+
 def checkpointed_grains():
     """Two grains, a checkpoint every few steps."""
     doc = drifting_grains(n=2, end=1e-7)

@@ -48,5 +48,6 @@ def test_grains_wider_than_the_cells_stay_candidates(tmp_path):
                        *s.x[s.nstart[b]:s.nstart[b] + s.nn[b]].max(axis=0)]
                       for b in range(g0, s.nb_own)])
     owned = np.ones(2, np.int8)
-    assert grain_pairs(cells, owned, boxes, sim.grid.nx, sim.grid.ny, sim.skin, 1).shape[0] == 0
-    assert grain_pairs(cells, owned, boxes, sim.grid.nx, sim.grid.ny, sim.skin, 2).shape[0] == 1
+    g = sim.grid
+    assert grain_pairs(cells, owned, boxes, g.nx, g.ny, sim.skin, 1, 0.0).shape[0] == 0
+    assert grain_pairs(cells, owned, boxes, g.nx, g.ny, sim.skin, 2, 0.0).shape[0] == 1

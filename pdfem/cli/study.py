@@ -423,6 +423,9 @@ def _speeds_args(p):
                    "(default the packaged scenes', kite)")
     p.add_argument("--speeds", default=",".join(f"{v:g}" for v in SPEEDS),
                    help="piston speeds [m/s] (default %(default)s)")
+    p.add_argument("--sides", choices=("walls", "periodic"), default="walls", help="the bed's "
+                   "sides: the packaged scenes' frictionless walls, or periodic (domain.periodic "
+                   "= \"x\": no side walls; default walls)")
     _output_args(p, "study-speeds", "<prefix>.json")
 
 
@@ -440,10 +443,13 @@ def _speeds(args):
     speeds = _check(_numbers(args.speeds, "--speeds"), lambda v: 0.0 < v < 1.0e5, "--speeds",
                     "a speed in (0, 1e5) m/s")
     doc = sp.packaged_doc(args.bed)
+    if args.sides == "periodic":
+        doc = sp.periodic_doc(doc)
     rungs = []
     for level in levels:
         for v in speeds:
-            rung = {"bed": args.bed, "rule": args.rule, "level": level, "velocity": v}
+            rung = {"bed": args.bed, "rule": args.rule, "level": level, "velocity": v,
+                    "sides": args.sides}
             scene = parse_scene(sp.rung_doc(doc, v, args.rule, level, args.mesh), ".",
                                 name=f"{sp.BEDS[args.bed]} ({sp.rung_name(rung)})")
             rungs.append((rung, scene))
@@ -466,7 +472,7 @@ def _speeds(args):
         print("", *sp.table_lines(rows), sep="\n")
         with open(args.prefix + ".json.part", "w") as f:
             json.dump(_plain({"bed": args.bed, "rule": args.rule, "mesh": args.mesh or "kite",
-                              "rows": rows}), f, indent=1)
+                              "sides": args.sides, "rows": rows}), f, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         lost = sum(1 for r in rows if r["runs"] and r["escaped"])
         print(f"pdfem study speeds: {len(rows) - stops} of {len(rows)} runs reach the scene's "

@@ -16,6 +16,7 @@ travels with a grain when it migrates.
 
 import numpy as np
 
+from pdfem.build import joint_masses
 from pdfem.effects.base import Effect
 from pdfem.effects.contact_candidates import Candidates, lexorder
 from pdfem.errors import InputError
@@ -149,6 +150,8 @@ class Contact(Effect):
         potential law's field over its bodies (pdfem.kernels.grain_depth)."""
         s = st.store
         edep, eapex = np.zeros((s.nelem, 4)), np.zeros(s.nelem)
+        # The masses the contacts see: a tied pair of block nodes moves as one
+        self.mass = joint_masses(s.m, ctx.partner)
         if self.deep:
             element_depths(s.conn, s.ebnd, s.elen, s.estart, s.ne, s.nstart, s.nn, edep, eapex)
         self.depth = (edep, eapex)
@@ -193,13 +196,13 @@ class Contact(Effect):
         forces = st.fc if added else NO_FORCES
         while True:
             out = self._outputs(self._rows)
-            n, _, nev = contact_pass(s.x, st.du, s.m, s.conn, s.ebnd, s.elem_gid, s.elem_loc,
+            n, _, nev = contact_pass(s.x, st.du, self.mass, s.conn, s.ebnd, s.elem_gid, s.elem_loc,
                                        s.elen, *self.depth, s.emat,
                                        self.law.reshape(-1, L.NPAR),
                                        self.law.shape[0], NO_ROWS, self._wall_p0, self._wall_n,
                                        self._wall_mu, cand, s.hkey, s.hval, NO_HISTORY, False,
                                        False, dt, self._bbox(s.nelem), forces, s.nn_own,
-                                       *out)
+                                       *out, ctx.grid.period)
             if n <= self._rows:
                 break
             self._outputs(n + n // 4 + 64)
@@ -312,8 +315,8 @@ class Contact(Effect):
         s = st.store
         vmax = max_speed(s.v, 0, s.nn_own)
         dt = APPROACH * self.delta_min / (2.0 * vmax) if vmax > 0.0 else np.inf
-        dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.elen, s.m, 0, s.ne_own, self.kn0_max,
-                                  self.zeta_max))
+        dt = min(dt, entry_dt_min(s.x, s.conn, s.ebnd, s.elen, self.mass, 0, s.ne_own,
+                                  self.kn0_max, self.zeta_max))
         if self.last is None:
             return dt
         last = self.last
@@ -333,7 +336,7 @@ class Contact(Effect):
                     return (f"the stiffness of the contact between body {k[0]} element {k[1]} "
                             f"and {other}")
         for e in range(s.ne_own):
-            if entry_dt_min(s.x, s.conn, s.ebnd, s.elen, s.m, e, e + 1, self.kn0_max,
+            if entry_dt_min(s.x, s.conn, s.ebnd, s.elen, self.mass, e, e + 1, self.kn0_max,
                             self.zeta_max) <= dt:
                 return (f"contact.kn0 on the edges of body {s.elem_gid[e]} element "
                         f"{s.elem_loc[e]}")

@@ -8,6 +8,11 @@ candidates, sorted once by contact key. No pair can come into contact before the
 rebuild, since rebuilds happen whenever a node may have moved half the skin. Blocks (global
 bodies) move freely: every step they are checked against every owned grain, and their
 candidates merged into the list in key order (:meth:`Candidates.step`).
+
+With periodic sides each candidate carries a third column, the period shift k of its second
+element (met k box widths to the right). Grains are never moved back into the box (a grain's
+cell is that of its image in the box): two grains meet at their nearest images, so k also
+counts the periods one has drifted farther than the other.
 """
 
 import math
@@ -31,15 +36,24 @@ def block_elements(s, g0):
 
 
 def sorted_candidates(s, pairs, welems, wids):
-    """Candidates of the contact pass (pdfem.kernels.contact_pass): element pairs (a, b) and
-    element-wall pairs (e, -1 - wall), sorted by global contact key."""
-    cand = np.concatenate([pairs, np.stack([welems, -1 - wids], axis=1)]).astype(np.int64)
+    """Candidates of the contact pass (pdfem.kernels.contact_pass): element pairs (a, b, k) and
+    element-wall pairs (e, -1 - wall, 0), sorted by global contact key."""
+    walls = np.stack([welems, -1 - wids, np.zeros_like(welems)], axis=1)
+    cand = np.concatenate([pairs, walls]).astype(np.int64)
     a, b = cand[:, 0], cand[:, 1]
     pair = b >= 0
     bb = np.where(pair, b, 0)
     keys = np.stack([s.elem_gid[a], s.elem_loc[a], np.where(pair, s.elem_gid[bb], b),
                      np.where(pair, s.elem_loc[bb], 0)], axis=1)
     return cand[lexorder(keys)]
+
+
+def repeated_pairs(s, cand):
+    """Number of key-sorted candidates whose element pair is the previous one's (met at two
+    period shifts: an element as wide as half the box)."""
+    a, b = cand[:, 0], cand[:, 1]
+    same = (a[1:] == a[:-1]) & (b[1:] == b[:-1])
+    return int(np.count_nonzero(same))
 
 
 def lexorder(keys):
@@ -72,8 +86,8 @@ class Candidates:
         # potential law: pdfem.kernels.grain_depth)
         self.deep = deep
         self.gpairs = np.zeros((0, 2), np.int64)
-        self.cand = np.zeros((0, 2), np.int64)
-        self._out = np.zeros((1024, 2), np.int64)
+        self.cand = np.zeros((0, 3), np.int64)
+        self._out = np.zeros((1024, 3), np.int64)
         self._wall_out = np.zeros((2, 1024), np.int64)
 
     def rebuild(self, st, ctx):
@@ -89,27 +103,41 @@ class Candidates:
         boxes = np.empty((s.nbody, 4))
         body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
         owned = (np.arange(g0, s.nbody) < s.nb_own).astype(np.int8)
-        pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], ctx.grid.nx, ctx.grid.ny,
-                            ctx.skin, ctx.reach)
-        self.gpairs = pairs + g0
+        pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], ctx.grid.nx,
+                            ctx.grid.ny, ctx.skin, ctx.reach, ctx.grid.period)
+        pairs[:, :2] += g0
+        self.gpairs = pairs[:, :2]
         reach = ctx.skin * (1.0 + REACH_SLACK)
-        epairs = self._element_pairs(st, ctx, bbox, self.gpairs, reach)
+        epairs = self._element_pairs(st, ctx, bbox, pairs, reach)
         welems, wids = self._wall_elements(st, ctx, bbox, block_elements(s, g0), s.ne_own, reach)
         self.cand = sorted_candidates(s, epairs, welems, wids)
+        if ctx.grid.periodic_x:
+            twice = repeated_pairs(s, self.cand)
+            if twice:
+                ctx.fail(f"periodic sides: {twice} element pair(s) within the skin of each "
+                         "other through both sides of the box; widen domain.box")
 
     def _block_pairs(self, st, ctx, boxes):
         """Owned grains near each block, and the block pairs (blocks move freely: every
-        step)."""
-        s, g0 = st.store, ctx.nglobal
-        parts = [np.zeros((0, 2), np.int64)]
+        step), with the block's period shift (each shift at which the boxes overlap)."""
+        s, g0, w = st.store, ctx.nglobal, ctx.grid.period
+        parts = [np.zeros((0, 3), np.int64)]
         own = np.arange(g0, s.nb_own)
         for g in range(g0):
             b = boxes[g]
-            near = own[(boxes[own, 0] <= b[2]) & (boxes[own, 2] >= b[0])
-                       & (boxes[own, 1] <= b[3]) & (boxes[own, 3] >= b[1])]
-            parts.append(np.stack([near, np.full(near.shape[0], g)], axis=1))
+            rows = own[(boxes[own, 1] <= b[3]) & (boxes[own, 3] >= b[1])]
+            lo, hi = np.zeros(rows.shape[0], np.int64), np.zeros(rows.shape[0], np.int64)
+            if w > 0.0:
+                lo = np.ceil((boxes[rows, 0] - b[2]) / w).astype(np.int64)
+                hi = np.floor((boxes[rows, 2] - b[0]) / w).astype(np.int64)
+            for k in range(int(lo.min(initial=0)), int(hi.max(initial=0)) + 1):
+                near = rows[(lo <= k) & (k <= hi) & (boxes[rows, 0] <= b[2] + k * w)
+                            & (boxes[rows, 2] >= b[0] + k * w)]
+                parts.append(np.stack([near, np.full(near.shape[0], g),
+                                       np.full(near.shape[0], k)], axis=1))
             for h in range(g + 1, g0):
-                parts.append(np.array([[g, h]], np.int64))
+                shifts = (-1, 0, 1) if w > 0.0 else (0,)
+                parts.append(np.array([[g, h, k] for k in shifts], np.int64))
         return np.concatenate(parts).astype(np.int64)
 
     def _element_pairs(self, st, ctx, bbox, bpairs, reach):
@@ -119,10 +147,10 @@ class Candidates:
         e0, e1 = s.estart, s.estart + s.ne
         while True:
             n = candidate_pairs(bbox, s.ebnd, s.elem_gid, s.elem_loc, e0, e1, bpairs, reach,
-                                self.deep, self._out)
+                                self.deep, ctx.grid.period, self._out)
             if n <= self._out.shape[0]:
                 return self._out[:n].copy()
-            self._out = np.zeros((2 * n, 2), np.int64)
+            self._out = np.zeros((2 * n, 3), np.int64)
 
     def _wall_elements(self, st, ctx, bbox, e0, e1, reach):
         """(elements, wall index) of the boundary elements of [e0, e1) within reach of a
@@ -150,6 +178,6 @@ class Candidates:
         pairs = self._element_pairs(st, ctx, bbox, self._block_pairs(st, ctx, boxes), 0.0)
         welems, wids = self._wall_elements(st, ctx, bbox, 0, block_elements(s, g0), 0.0)
         blocks = sorted_candidates(s, pairs, welems, wids)
-        cand = np.empty((self.cand.shape[0] + blocks.shape[0], 2), np.int64)
+        cand = np.empty((self.cand.shape[0] + blocks.shape[0], 3), np.int64)
         merge_candidates(self.cand, blocks, s.elem_gid, s.elem_loc, cand)
         return cand

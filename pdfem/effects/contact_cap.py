@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from pdfem.build import joint_masses
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact_law import DT_FACTOR
 from pdfem.kernels.stable import q4_stable_dt
@@ -28,14 +29,16 @@ def contact_stiffness_cap(st, ctx, contact, kcap=None):
         return kcap, _apply_cap(contact, kcap, None)
     dt_el = global_min(ctx.comm, q4_stable_dt(s.x, s.conn, s.emat, ctx.mat_params, s.sig,
                                                    0, n))
-    # Stiffness limit of each boundary edge: contact_dt(m, rigid, k L) >= dt_el
+    # Stiffness limit of each boundary edge: contact_dt(m, rigid, k L) >= dt_el (a tied pair
+    # of block nodes moves with their joint mass)
+    mass = joint_masses(s.m, ctx.partner)
     kcap = math.inf
     for k in range(4):
         on = s.ebnd[:n, k] != 0
         a, b = s.conn[:n, k][on], s.conn[:n, (k + 1) % 4][on]
         if a.shape[0]:
             le = np.hypot(s.x[b, 0] - s.x[a, 0], s.x[b, 1] - s.x[a, 1])
-            m = np.minimum(s.m[a], s.m[b])
+            m = np.minimum(mass[a], mass[b])
             kcap = min(kcap, float(((2.0 * DT_FACTOR) ** 2 * m / (dt_el * dt_el * le)).min()))
     kcap = global_min(ctx.comm, kcap)
     if not math.isfinite(kcap):

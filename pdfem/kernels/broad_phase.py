@@ -55,13 +55,16 @@ def _on_boundary(ebnd, e):
 
 
 @njit(cache=True)
-def _emit(out, n, a, b, egid, eloc):
-    """Store pair n as (lower global key, higher global key) if it fits; return n + 1."""
+def _emit(out, n, a, b, k, egid, eloc):
+    """Store pair n as (lower global key, higher global key) if it fits, with b's period shift
+    k in a third column where out has one (negated when the pair is turned); return n + 1."""
     if egid[a] > egid[b] or (egid[a] == egid[b] and eloc[a] > eloc[b]):
-        a, b = b, a
+        a, b, k = b, a, -k
     if n < out.shape[0]:
         out[n, 0] = a
         out[n, 1] = b
+        if out.shape[1] > 2:
+            out[n, 2] = k
     return n + 1
 
 
@@ -78,24 +81,25 @@ def pairs_from_bboxes(bbox, ebnd, egid, eloc, e0, e1, skin, out):
             continue
         for j in range(i + 1, e1):
             if egid[j] != egid[i] and _on_boundary(ebnd, j) and boxes_near(bbox[i], bbox[j], skin):
-                n = _emit(out, n, i, j, egid, eloc)
+                n = _emit(out, n, i, j, 0, egid, eloc)
     return n
 
 
 @njit(cache=True)
-def _rows_near(a, i, b, j, skin):
-    """boxes_near of rows a[i] and b[j], indexed in place (no row views in the hot loops)."""
-    return (a[i, 0] - b[j, 2] <= skin and b[j, 0] - a[i, 2] <= skin
+def _rows_near(a, i, b, j, skin, sh):
+    """boxes_near of rows a[i] and b[j] (b's shifted by sh in x), indexed in place (no row views
+    in the hot loops)."""
+    return (a[i, 0] - (b[j, 2] + sh) <= skin and (b[j, 0] + sh) - a[i, 2] <= skin
             and a[i, 1] - b[j, 3] <= skin and b[j, 1] - a[i, 3] <= skin)
 
 
 @njit(cache=True)
-def _near_list(bbox, ebnd, e0, e1, boxes, b, skin, deep, lst):
-    """Boundary elements (with deep, all elements) of [e0, e1) within skin of boxes[b], into
-    lst; return their count."""
+def _near_list(bbox, ebnd, e0, e1, boxes, b, sh, skin, deep, lst):
+    """Boundary elements (with deep, all elements) of [e0, e1) within skin of boxes[b] shifted
+    by sh in x, into lst; return their count."""
     c = 0
     for e in range(e0, e1):
-        if (deep or _on_boundary(ebnd, e)) and _rows_near(bbox, e, boxes, b, skin):
+        if (deep or _on_boundary(ebnd, e)) and _rows_near(bbox, e, boxes, b, skin, sh):
             lst[c] = e
             c += 1
     return c
@@ -118,13 +122,15 @@ def _body_box(bbox, ebnd, e0, e1, deep, box):
 
 
 @njit(cache=True)
-def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, deep, out):
+def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, deep, period, out):
     """Boundary-element pairs of the candidate body pairs bpairs (nb, 2) whose bboxes are within
     skin (boxes_near); with deep, the pairs of a boundary element of either body and any
     element of the other. Body i owns elements [body_e0[i], body_e1[i]). Pairs come out in
     body-pair order, then element order, oriented lower global key first, into out (cap, 2);
     returns the number found (only the first cap are written). Without deep, the same set as
-    pairs_from_bboxes.
+    pairs_from_bboxes. Periodic sides: a third column of bpairs (nb, 3) holds the shift k of
+    the pair's second body, met k periods (period [m]) to the right, and out (cap, 3) gets each
+    pair's shift (negated where the pair is turned to put the lower key first).
     """
     big = 1
     for q in range(bpairs.shape[0]):
@@ -136,26 +142,29 @@ def candidate_pairs(bbox, ebnd, egid, eloc, body_e0, body_e1, bpairs, skin, deep
     boxes = np.empty((body_e0.shape[0], 4))
     for i in range(body_e0.shape[0]):
         _body_box(bbox, ebnd, body_e0[i], body_e1[i], deep, boxes[i])
+    shifted = bpairs.shape[1] > 2
     n = 0
     for q in range(bpairs.shape[0]):
         i = bpairs[q, 0]
         j = bpairs[q, 1]
+        k = bpairs[q, 2] if shifted else 0
         if body_e1[i] <= body_e0[i] or body_e1[j] <= body_e0[j]:
             continue
         if egid[body_e0[i]] == egid[body_e0[j]]:
             continue
         if egid[body_e0[i]] > egid[body_e0[j]]:
-            i, j = j, i
+            i, j, k = j, i, -k
+        sh = k * period
         # Boundary elements of each body near the other body, then all their pairs
-        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], boxes, j, skin, deep, la)
-        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], boxes, i, skin, deep, lb)
+        na = _near_list(bbox, ebnd, body_e0[i], body_e1[i], boxes, j, sh, skin, deep, la)
+        nb = _near_list(bbox, ebnd, body_e0[j], body_e1[j], boxes, i, -sh, skin, deep, lb)
         for u in range(na):
             bu = not deep or _on_boundary(ebnd, la[u])
             for v in range(nb):
                 if not bu and not _on_boundary(ebnd, lb[v]):
                     continue
-                if _rows_near(bbox, la[u], bbox, lb[v], skin):
-                    n = _emit(out, n, la[u], lb[v], egid, eloc)
+                if _rows_near(bbox, la[u], bbox, lb[v], skin, sh):
+                    n = _emit(out, n, la[u], lb[v], k, egid, eloc)
     return n
 
 

@@ -164,9 +164,11 @@ def _clear(r, us_keep, code, active, nodes, weights, fnod, us_out, res):
 @njit(cache=True)
 def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex, emat, law, nmat, lrow,
                  wall_p0, wall_n, wall_mu, cand, hkey, hval, us_in, dense, general, dt, bbox, fc,
-                 n_owned, active, keys, elems, nodes, weights, fnod, us_out, res):
+                 n_owned, active, keys, elems, nodes, weights, fnod, us_out, res, period=0.0):
     """Evaluate the candidate contacts cand (nc, 2): element pairs (a, b) of different bodies and
-    element-wall pairs (e, -1 - w).
+    element-wall pairs (e, -1 - w). With periodic sides cand is (nc, 3), its third column the
+    shift k of the pair: b is met k periods (period [m]) to the right, its corners and box
+    shifted by k period in x (-k when the pair is turned to put the lower key first).
 
     x, du (nn, 2): positions and displacement increments of the step (du / dt is the velocity
     the normal damping sees; dt = 0: none); m (nn,) lumped masses; conn (ne, 4) int64 CCW;
@@ -217,11 +219,13 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex, emat, law,
     nbad = 0
     nev = 0
     held = -1
+    shifted = cand.shape[1] > 2
     # Every element's box (broad_phase.element_bboxes: the candidates' test)
     element_bboxes(x, conn, 0, conn.shape[0], bbox)
     for c in range(cand.shape[0]):
         a = cand[c, 0]
         b = cand[c, 1]
+        kp = cand[c, 2] if shifted else 0
         wall = b < 0
         w = -1 - b
         wnx = 0.0
@@ -230,6 +234,10 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex, emat, law,
         flip = not wall and (egid[a] > egid[b] or (egid[a] == egid[b] and eloc[a] > eloc[b]))
         if flip:
             a, b = b, a
+            kp = -kp
+        # B's shift across the periodic sides (added only when there is one: x + 0.0 would
+        # turn a -0.0 into +0.0)
+        sh = kp * period
         # The broad phase's exact test of this step, on the elements' boxes
         if wall:
             wnx = wall_n[w, 0]
@@ -238,7 +246,12 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex, emat, law,
                 min(wny * (bbox[a, 1] - wall_p0[w, 1]), wny * (bbox[a, 3] - wall_p0[w, 1]))
             near = lo < 0.0
         else:
-            near = (bbox[a, 0] - bbox[b, 2] <= 0.0 and bbox[b, 0] - bbox[a, 2] <= 0.0
+            bx0 = bbox[b, 0]
+            bx2 = bbox[b, 2]
+            if kp != 0:
+                bx0 += sh
+                bx2 += sh
+            near = (bbox[a, 0] - bx2 <= 0.0 and bx0 - bbox[a, 2] <= 0.0
                     and bbox[a, 1] - bbox[b, 3] <= 0.0 and bbox[b, 1] - bbox[a, 3] <= 0.0)
         # The law of the pair (contact_law); a pair with an element inside its body (no
         # boundary edge, elen 0) is a contact of the potential law only (grain_depth)
@@ -262,6 +275,9 @@ def contact_pass(x, du, m, conn, ebnd, egid, eloc, elen, edep, eapex, emat, law,
             for k in range(4):
                 xb[k, 0] = x[conn[b, k], 0]
                 xb[k, 1] = x[conn[b, k], 1]
+            if kp != 0:
+                for k in range(4):
+                    xb[k, 0] += sh
         # Overlap, area gradient g and contact frame (n from A into B, width, centroid c)
         width = 0.0
         if wall:

@@ -3,6 +3,8 @@
 A candidate is an element pair (a, b) (local element indices, a of lower global key) or an
 element-wall pair (e, -1 - w). Its key is (gid_a, elem_a, gid_b, elem_b), a wall's
 (gid, elem, -1 - w, 0): the order in which contact forces are added to a node on every rank.
+A third column, where present, is the pair's period shift k (periodic sides: b is met k box
+widths to the right; 0 otherwise), which is not part of the key.
 """
 
 from numba import njit
@@ -40,17 +42,18 @@ def _key_le(c1, i, c2, j, egid, eloc):
 
 @njit(cache=True)
 def merge_candidates(c1, c2, egid, eloc, out):
-    """Merge two key-sorted candidate lists into out (n1 + n2, 2), c1's first on equal keys."""
+    """Merge two key-sorted candidate lists into out (n1 + n2, ncol), c1's first on equal keys
+    (every column of a row copied: the pair and its shift)."""
     i = 0
     j = 0
     n1 = c1.shape[0]
     n2 = c2.shape[0]
     for k in range(n1 + n2):
         if j >= n2 or (i < n1 and _key_le(c1, i, c2, j, egid, eloc)):
-            out[k, 0] = c1[i, 0]
-            out[k, 1] = c1[i, 1]
+            for col in range(out.shape[1]):
+                out[k, col] = c1[i, col]
             i += 1
         else:
-            out[k, 0] = c2[j, 0]
-            out[k, 1] = c2[j, 1]
+            for col in range(out.shape[1]):
+                out[k, col] = c2[j, col]
             j += 1

@@ -41,7 +41,8 @@ def advance_positions(x, v, dt, n1, du):
 
 
 @njit(cache=True)
-def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin, first, fc):
+def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin, first, fc,
+                       partner):
     """Eq. 68 with boundary conditions; accumulate damping, reaction and contact work per body.
 
     bcf[i, k]: 0 free, 1 fixed (velocity 0), 2 prescribed velocity bcv[i, k].
@@ -51,8 +52,13 @@ def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin, fi
     next step, so that K_n + U_n and the accumulated work balance exactly at every step.
     ``first`` marks the start-up half step, which has no interval before it. fc (nn, 2) is
     the contacts' share of f, whose work is accumulated the same way; shape (0, 2): none.
+    partner (np,) ties node i < np to node partner[i] (-1: none; periodic sides: a block's
+    left and right columns): both take the velocity of their summed force and mass, added in
+    the order of the lower index, and each books its own share of the energies (the tie does
+    no work, as the two move together). Shape (0,): no ties.
     """
     contact = fc.shape[0] > 0
+    ntied = partner.shape[0]
     c1, c2 = damping_coefficients(gamma, dt)
     # Pending halves of the previous step belong to the interval that just ended
     for b in range(kin.shape[0]):
@@ -67,9 +73,14 @@ def advance_velocities(v, f, m, bcf, bcv, gamma, dt, n1, node_body, acc, kin, fi
     for i in range(n1):
         b = node_body[i]
         mi = m[i]
+        p = partner[i] if i < ntied else -1
         for k in range(2):
             vold = v[i, k]
-            vnew = c1 * vold + c2 * f[i, k] / mi
+            if p >= 0:
+                lo, hi = min(i, p), max(i, p)
+                vnew = c1 * vold + c2 * (f[lo, k] + f[hi, k]) / (m[lo] + m[hi])
+            else:
+                vnew = c1 * vold + c2 * f[i, k] / mi
             # Kinematic constraint: the reaction force is what it takes to impose it
             if bcf[i, k] != 0:
                 vbc = 0.0 if bcf[i, k] == 1 else bcv[i, k]

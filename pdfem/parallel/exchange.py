@@ -16,7 +16,7 @@ import numpy as np
 
 from pdfem.kernels.centroids import body_centroids
 from pdfem.parallel.halo import Halo
-from pdfem.parallel.mpi import alltoallv, global_max
+from pdfem.parallel.mpi import alltoallv, array_max
 from pdfem.store import Batch, Store, ranges
 
 
@@ -35,9 +35,11 @@ def cell_reach(comm, store, grid, nglobal, skin):
     to the farthest side of its box, and points that far apart lie at most
     ceil(distance / cell width) cells apart. At least 1, at most the grid's larger side (a
     reach that wide already covers every cell: a grain torn across the box by a run that the
-    guards are about to stop must not size arrays beyond memory)."""
+    guards are about to stop must not size arrays beyond memory). Returns (reach, wide), wide
+    the widest grain's extent in x [m] (periodic sides: grains that may touch are at most
+    wide + skin apart, centre to centre of their boxes)."""
     n = store.nb_own - nglobal
-    far = 0.0
+    far = wide = 0.0
     if n:
         cent = np.empty((n, 2))
         body_centroids(store.x, store.nstart, store.nn, nglobal, store.nb_own, cent)
@@ -48,22 +50,26 @@ def cell_reach(comm, store, grid, nglobal, skin):
         far_x = np.maximum(cent[:, 0] - lo[:, 0], hi[:, 0] - cent[:, 0]).max() / grid.hx
         far_y = np.maximum(cent[:, 1] - lo[:, 1], hi[:, 1] - cent[:, 1]).max() / grid.hy
         far = max(far_x, far_y)
+        wide = float((hi[:, 0] - lo[:, 0]).max())
     skin_cells = skin / min(grid.hx, grid.hy)
-    reach = 2.0 * global_max(comm, far) + skin_cells
+    far, wide = array_max(comm, np.array([far, wide]))
+    reach = 2.0 * far + skin_cells
     widest = max(grid.nx, grid.ny)
-    return max(1, math.ceil(reach)) if reach < widest else widest
+    return (max(1, math.ceil(reach)) if reach < widest else widest), float(wide)
 
 
 def neighbour_ranks(grid, owner, cells, reach=1):
     """(n, (2 reach + 1)^2) ranks owning the cell block of ``reach`` cells around each cell
-    (clipped at the grid edge)."""
+    (clipped at the grid edge; wrapped in x when the grid is periodic there, so that a grain
+    near one side is a ghost, as it is, on the ranks owning cells near the other)."""
     ix, iy = cells % grid.nx, cells // grid.nx
     side = 2 * reach + 1
     out = np.empty((cells.shape[0], side * side), np.int64)
     k = 0
     for dy in range(-reach, reach + 1):
         for dx in range(-reach, reach + 1):
-            jx = np.clip(ix + dx, 0, grid.nx - 1)
+            jx = (np.mod(ix + dx, grid.nx) if grid.periodic_x
+                  else np.clip(ix + dx, 0, grid.nx - 1))
             jy = np.clip(iy + dy, 0, grid.ny - 1)
             out[:, k] = owner[jx + grid.nx * jy]
             k += 1

@@ -140,6 +140,14 @@ def _gather_grains(sim):
     return (gids[order],) + tuple(np.array([c[k] for k in order]) for c in cols)
 
 
+def wrap_into_box(nodes, box):
+    """Periodic sides: move each grain's nodes (n, nn, 2) by whole box widths so that its
+    centroid lies in [x0, x1) (a grain that drifted out through one side, as its image)."""
+    x0, x1 = box[0], box[2]
+    shift = np.floor((nodes[:, :, 0].mean(axis=1) - x0) / (x1 - x0)) * (x1 - x0)
+    nodes[:, :, 0] -= shift[:, None]
+
+
 def _run_phase(name, scene, comm, threshold, log, max_steps, where, allow_huge=False):
     """Step one phase until the kinetic energy is below threshold; return (sim, figures).
     A phase without a step limit of its own is refused beyond MAX_STEPS (pdfem.limits, the
@@ -208,6 +216,8 @@ def prepare_rain(path, scene, out, comm, log, allow_huge=False):
             sim, figs[phase] = _run_phase(phase, sc, comm, threshold, log, limit, where,
                                           allow_huge)
             state = _gather_grains(sim)
+            if comm.rank == 0 and r["domain"]["periodic"] == "x":
+                wrap_into_box(state[1], box)
             bed, grains = (tmp[k] if k < len(tmp) else out), None
             err = None
             if comm.rank == 0:

@@ -2,10 +2,12 @@
 the grain sizes, everything inside the domain box, nothing overlapping (hand-placed grains) or
 every node clear of the blocks (a prepared bed)."""
 
+import math
+
 import numpy as np
 
 from pdfem.scene import geometry as geo
-from pdfem.scene.values import SceneError
+from pdfem.scene.values import SceneError, show
 
 
 def grain_arrays(inline, rows, mat_ids):
@@ -54,23 +56,57 @@ def check_geometry(r, g, label):
         shown = f"{least:.6g}" if float(f"{least:.6g}") >= least else f"{least * 1.000001:.6g}"
         raise SceneError("domain.cell_size", f"must be >= {shown} (largest grain diameter "
                          f"{diam:.6g} + skin {dom['skin']:.6g}) (got {dom['cell_size']!r})")
+    # Periodic sides: a grain meets another at one image when the box is at least three cells
+    # (a grain's cell and its two neighbours) wide
+    if n and dom["periodic"] == "x" and math.floor((box[2] - box[0]) / dom["cell_size"]) < 3:
+        raise SceneError("domain.box", f'must be at least 3 cells wide with domain.periodic = '
+                         f'"x" (width {show(box[2] - box[0])} m, cell size '
+                         f'{show(dom["cell_size"])} m)')
     # Inside the domain box
     for i, bb in enumerate(blocks):
         if bb[0] < box[0] or bb[1] < box[1] or bb[2] > box[2] or bb[3] > box[3]:
             raise SceneError(f"blocks[{i}].box", "outside the domain box")
+    periodic = dom["periodic"] == "x"
     if "nodes" in g:
-        _bed_geometry(r, g, label, blocks, box)
+        _bed_geometry(r, g, label, blocks, box, periodic)
         return
-    _inside_box_and_apart(*geo.ellipse_aabb(g["center"], g["axes"], g["angle"]), box, blocks,
-                          label)
+    lo, hi = geo.ellipse_aabb(g["center"], g["axes"], g["angle"])
+    _inside_box_and_apart(*_centred_in_x(lo, hi, g["center"], periodic), box, blocks, label)
     hit = geo.first_grain_block_overlap(g["center"], g["axes"], g["angle"], blocks)
     if hit:
         raise SceneError(label(hit[0]), f"overlaps blocks[{hit[1]}] "
                          f"({r['blocks'][hit[1]]['name']}) at t=0")
-    pair = geo.first_grain_overlap(g["center"], g["axes"], g["angle"])
+    pair = _first_overlap(g, box, diam, periodic)
     if pair:
         j = label(pair[1])
         raise SceneError(label(pair[0]), f"overlaps {j.replace('grains_file: ', '')} at t=0")
+
+
+def _centred_in_x(lo, hi, centre, periodic):
+    """With periodic sides only a grain's centre must lie within the box in x (a grain may
+    cross the seam): its box's x extent shrunk to the centre."""
+    if not periodic:
+        return lo, hi
+    lo, hi = lo.copy(), hi.copy()
+    lo[:, 0] = hi[:, 0] = centre[:, 0]
+    return lo, hi
+
+
+def _first_overlap(g, box, diam, periodic):
+    """The first overlapping pair of hand-placed grains; with periodic sides also through the
+    seam: the grains near the left side are tested once more shifted by the box's width."""
+    c, axes, angle = g["center"], g["axes"], g["angle"]
+    n = c.shape[0]
+    if not periodic:
+        return geo.first_grain_overlap(c, axes, angle)
+    near = np.nonzero(c[:, 0] - box[0] < diam)[0]
+    shifted = c[near] + np.array([box[2] - box[0], 0.0])
+    pair = geo.first_grain_overlap(np.concatenate([c, shifted]),
+                                   np.concatenate([axes, axes[near]]),
+                                   np.concatenate([angle, angle[near]]))
+    if pair and pair[1] >= n:
+        pair = tuple(sorted((pair[0], int(near[pair[1] - n]))))
+    return pair
 
 
 def _inside_box_and_apart(lo, hi, box, blocks, label):
@@ -83,7 +119,7 @@ def _inside_box_and_apart(lo, hi, box, blocks, label):
         raise SceneError(f"blocks[{pair[0]}]", f"overlaps blocks[{pair[1]}]")
 
 
-def _bed_geometry(r, g, label, blocks, box):
+def _bed_geometry(r, g, label, blocks, box, periodic):
     """A prepared bed: every node inside the box and outside every block.
 
     Grains of a bed touch (their contacts carry the overlap of the contact law), so the
@@ -92,7 +128,9 @@ def _bed_geometry(r, g, label, blocks, box):
     """
     nodes = g["nodes"]
     tol = r["contact"]["delta_max"] if "contact" in r else 0.0
-    _inside_box_and_apart(nodes.min(axis=1) + tol, nodes.max(axis=1) - tol, box, blocks, label)
+    lo, hi = nodes.min(axis=1) + tol, nodes.max(axis=1) - tol
+    _inside_box_and_apart(*_centred_in_x(lo, hi, nodes.mean(axis=1), periodic), box, blocks,
+                          label)
     for k, bb in enumerate(blocks):
         inside = ((nodes[:, :, 0] > bb[0] + tol) & (nodes[:, :, 0] < bb[2] - tol)
                   & (nodes[:, :, 1] > bb[1] + tol) & (nodes[:, :, 1] < bb[3] - tol)).any(axis=1)

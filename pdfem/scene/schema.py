@@ -31,6 +31,10 @@ DOMAIN = {
                      "or strips", choices=("rcb", "strips")),
     "rebalance": _nonneg("float", 0.0, "re-partition when the load imbalance max/mean exceeds "
                          "this; 0 = never, otherwise >= 1"),
+    "periodic": Key("str", "none", "periodic sides: with \"x\" a grain leaving through one side "
+                    "of the box comes back through the other, grains meet across the seam, and "
+                    "blocks spanning the box in x close on themselves (no side walls, no wall "
+                    "conditions)", choices=("none", "x")),
 }
 
 # [time]

@@ -80,6 +80,8 @@ def resolve(doc, base_dir):
         r["thermal_bc"] = [check_table(b, S.THERMAL_BC, f"thermal_bc[{i}]") for i, b in
                            enumerate(array_of_tables(doc["thermal_bc"], "thermal_bc"))]
     _effect_rules(r)
+    if r["domain"]["periodic"] == "x":
+        _periodic_rules(r)
     r["output"] = _output(doc.get("output", {}), r["time"]["end"], r)
     r["gauges"] = _gauges(doc.get("gauges", []), r["blocks"])
     if "shock" in doc:
@@ -157,6 +159,40 @@ def _domain_rules(d):
     if 0.0 < d["rebalance"] < 1.0:
         raise SceneError("domain.rebalance", f"must be 0 (never) or >= 1 (max/mean load) "
                          f"(got {show(d['rebalance'])})")
+
+
+def _periodic_rules(r):
+    """Periodic sides in x: no side walls or conditions on them; each block spans the box in x
+    with at least three elements (its left and right node columns become one), and no condition
+    or held temperature on one of those columns alone; no conduction in blocks (the seam's
+    heat flux is not tied)."""
+    x0, _, x1, _ = r["domain"]["box"]
+    for side in ("left", "right"):
+        if r.get("walls", {}).get(side, "none") != "none":
+            raise SceneError(f"walls.{side}", 'must be "none" with domain.periodic = "x" (the '
+                             "grains cross that side)")
+    for i, bc in enumerate(r["bc"]):
+        if bc.get("wall") in ("left", "right"):
+            raise SceneError(f"bc[{i}].wall", f'no {bc["wall"]} wall with domain.periodic = '
+                             '"x" (that side is the seam)')
+        if bc.get("nodes") in ("left", "right"):
+            raise SceneError(f"bc[{i}].nodes", f'{bc["nodes"]} nodes alone cannot be held with '
+                             'domain.periodic = "x" (they are one column with the other side\'s)')
+    for i, b in enumerate(r.get("thermal_bc", [])):
+        if b["nodes"] in ("left", "right"):
+            raise SceneError(f"thermal_bc[{i}].nodes", f'{b["nodes"]} nodes alone cannot be '
+                             'held with domain.periodic = "x"')
+    for i, b in enumerate(r["blocks"]):
+        if b["box"][0] != x0 or b["box"][2] != x1:
+            raise SceneError(f"blocks[{i}].box", f"must span the domain box in x, [{show(x0)}, "
+                             f'{show(x1)}], with domain.periodic = "x" (got [{show(b["box"][0])}'
+                             f', {show(b["box"][2])}])')
+        if b["nx"] < 3:
+            raise SceneError(f"blocks[{i}].nx", 'must be >= 3 with domain.periodic = "x" (got '
+                             f'{b["nx"]}): two elements meet at one image only')
+    if r["blocks"] and "conduction" in r:
+        raise SceneError("conduction", 'not available with blocks and domain.periodic = "x" '
+                         "(the heat flux across a block's seam is not tied)")
 
 
 def _materials(value):
@@ -461,4 +497,8 @@ def _prepare(value, r, mat_ids):
                              f"\"{pr['method']}\")")
     if "weight" in pr:
         _known_block(pr["weight"], [b["name"] for b in r["blocks"]], "prepare.weight")
+    if pr["method"] == "geometric" and r["domain"]["periodic"] != "none":
+        raise SceneError("prepare.method", 'the geometric packing fills a box between side '
+                         'walls: with domain.periodic = "x" use method = "rain", or pack '
+                         "between walls and run the bed with periodic sides")
     return {k: pr[k] for k in S.PREPARE if k in pr}

@@ -198,7 +198,7 @@ def test_candidate_pairs_equal_brute_force():
     cand = np.zeros((n + 5, 2), np.int64)
     assert (
         BP.candidate_pairs(bbox, ebnd, egid, eloc, np.array(e0), np.array(e1), bp, skin, False,
-                           cand) == n
+                           0.0, cand) == n
     )
     cand = cand[:n]
     assert {tuple(p) for p in brute} == {tuple(p) for p in cand}
@@ -221,7 +221,7 @@ def test_candidate_pairs_equal_brute_force():
     # exactly the pairs of elements of two bodies, one on its boundary, within skin
     deep = np.zeros((4 * n + 5, 2), np.int64)
     nd = BP.candidate_pairs(bbox, ebnd, egid, eloc, np.array(e0), np.array(e1), bp, skin, True,
-                            deep)
+                            0.0, deep)
     want = {(i, j) for i in range(ne) for j in range(ne)
             if egid[i] < egid[j] and (ebnd[i].any() or ebnd[j].any())
             and BP.boxes_near(bbox[i], bbox[j], skin)}

@@ -6,21 +6,25 @@ height of its face nodes) or the hammer's has gone past it: through the block, o
 seam between the block and a side wall. The bed then holds less grain than it was given; the
 share of the grains' mass in elements reaching that far bounds how much. How far grain nodes
 got past the box's sides is given beside it: a contact wall lets a corner node in deeper than
-the mean overlap delta its law acts on.
+the mean overlap delta its law acts on (with periodic sides there are none to pass).
 """
 
 import numpy as np
 
 
-def escape_depths(grain_bottom, grain_top, grain_xrange, anvil_y, hammer_y, box):
+def escape_depths(grain_bottom, grain_top, grain_xrange, anvil_y, hammer_y, box, periodic=False):
     """The farthest [m] any grain node got beyond the anvil's face (below it), the hammer's
     face (above it) and the box's left or right side (outside it), over the frames: a dict
     with keys below_anvil, above_hammer and past_sides (negative: never beyond), and the time
     index of each. Per-frame inputs: the lowest and highest grain node (nf,), the grain nodes'
-    x range (nf, 2), the anvil's and the hammer's face heights (nf,); box [x0, y0, x1, y1]."""
+    x range (nf, 2), the anvil's and the hammer's face heights (nf,); box [x0, y0, x1, y1].
+    With periodic sides past_sides is None (a grain crossing a side comes back through the
+    other)."""
     depth = {"below_anvil": anvil_y - grain_bottom, "above_hammer": grain_top - hammer_y,
              "past_sides": np.maximum(box[0] - grain_xrange[:, 0], grain_xrange[:, 1] - box[2])}
-    out = {}
+    if periodic:
+        del depth["past_sides"]
+    out = {"past_sides": None, "past_sides_frame": None}
     for key, d in depth.items():
         k = int(np.argmax(d))
         out[key], out[key + "_frame"] = float(d[k]), k

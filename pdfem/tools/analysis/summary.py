@@ -29,7 +29,8 @@ def _escape_line(e):
     line = (f"grain nodes at most {_f(e['below_anvil'], 1e6, '.1f')} um below the anvil's "
             f"face and {_f(e['above_hammer'], 1e6, '.1f')} um above the hammer's (contact "
             f"overlap reaches {_f(e['reach'], 1e6, '.1f')} um), "
-            f"{_f(e['past_sides'], 1e6, '.1f')} um past the box's sides")
+            + ("periodic sides" if e["past_sides"] is None
+               else f"{_f(e['past_sides'], 1e6, '.1f')} um past the box's sides"))
     if e["escaped"]:
         line += (f": grain material has gone past the anvil or the hammer, at most "
                  f"{_f(e['mass'], 100, '.3f')} % of the grains' mass in elements reaching past "
@@ -153,8 +154,9 @@ def compute(run):
     interp = float(inside.sum()) / max(1, int(np.count_nonzero(run.node_body < run.ng)))
     # Grain nodes farther beyond the anvil, the hammer or the box's sides than contact reaches
     # (pdfem.tools.analysis.escape)
+    dom = run.scene["domain"]
     esc = escape_depths(run.grain_bottom, run.grain_top, run.grain_xrange, run.anvil_y,
-                        run.hammer_y, run.scene["domain"]["box"])
+                        run.hammer_y, dom["box"], dom.get("periodic", "none") == "x")
     reach = contact_reach(run.scene)
     escaped = {k: esc[k] for k in ("below_anvil", "above_hammer", "past_sides")}
     far = max(("below_anvil", "above_hammer"), key=escaped.get)

@@ -41,6 +41,18 @@ def packaged_doc(bed):
     return doc
 
 
+def periodic_doc(doc):
+    """``doc`` with periodic sides in x instead of its side walls: domain.periodic = "x", no
+    left or right contact wall, no condition on those walls (``doc`` is not changed)."""
+    d = copy.deepcopy(doc)
+    d["domain"]["periodic"] = "x"
+    walls = d.get("walls", {})
+    for side in ("left", "right"):
+        walls.pop(side, None)
+    d["bc"] = [b for b in d.get("bc", []) if b.get("wall") not in ("left", "right")]
+    return d
+
+
 def piston_doc(doc, speed, rule, level, mesh=None, hold=0.0):
     """A rung: ``doc`` with the piston at ``speed`` (hammer block and velocity condition),
     its end, release, ramp-down and output intervals scaled by SCENE_SPEED / speed, and the
@@ -98,8 +110,9 @@ def rung_doc(doc, speed, rule, level, mesh=None):
 
 
 def rung_name(rung):
-    """The file stem of a rung's run (a dict of bed, rule, level and velocity)."""
-    return f"{rung['bed']}-{rung['rule']}-l{rung['level']}-v{rung['velocity']:g}"
+    """The file stem of a rung's run (a dict of bed, rule, level, velocity and sides)."""
+    sides = "-periodic" if rung.get("sides") == "periodic" else ""
+    return f"{rung['bed']}-{rung['rule']}-l{rung['level']}-v{rung['velocity']:g}{sides}"
 
 
 def row_of(rung, summary, wall_s, steps):

@@ -11,8 +11,9 @@ candidates merged into the list in key order (:meth:`Candidates.step`).
 
 With periodic sides each candidate carries a third column, the period shift k of its second
 element (met k box widths to the right). Grains are never moved back into the box (a grain's
-cell is that of its image in the box): two grains meet at their nearest images, so k also
-counts the periods one has drifted farther than the other.
+cell is that of its image in the box), so k also counts the periods one grain has drifted
+farther than the other; two grains meet at each image whose box is within the skin (both,
+when they span the box between them), an element pair at one only.
 """
 
 import math
@@ -48,7 +49,7 @@ def sorted_candidates(s, pairs, welems, wids):
     return cand[lexorder(keys)]
 
 
-def repeated_pairs(s, cand):
+def repeated_pairs(cand):
     """Number of key-sorted candidates whose element pair is the previous one's (met at two
     period shifts: an element as wide as half the box)."""
     a, b = cand[:, 0], cand[:, 1]
@@ -112,7 +113,7 @@ class Candidates:
         welems, wids = self._wall_elements(st, ctx, bbox, block_elements(s, g0), s.ne_own, reach)
         self.cand = sorted_candidates(s, epairs, welems, wids)
         if ctx.grid.periodic_x:
-            twice = repeated_pairs(s, self.cand)
+            twice = repeated_pairs(self.cand)
             if twice:
                 ctx.fail(f"periodic sides: {twice} element pair(s) within the skin of each "
                          "other through both sides of the box; widen domain.box")

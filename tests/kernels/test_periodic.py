@@ -140,3 +140,13 @@ def test_prepared_grains_are_written_as_their_images_in_the_box():
                       [[7.0, 2.0], [7.4, 2.0]], [[1.0, 0.0], [1.2, 0.0]]])
     wrap_into_box(nodes, (0.0, 0.0, 3.0, 5.0))
     assert np.allclose(nodes[:, :, 0], [[2.7, 3.1], [-0.1, 0.3], [1.0, 1.4], [1.0, 1.2]])
+
+
+def test_an_element_pair_met_at_two_shifts_is_counted():
+    # Key-sorted candidates: the pair (3, 7) at shifts 0 and 1 (an element half the box wide)
+    # is one repeat; the same element with other partners and a wall are not
+    from pdfem.effects.contact_candidates import repeated_pairs
+
+    cand = np.array([[3, 5, 0], [3, 7, 0], [3, 7, 1], [3, -1, 0], [4, 7, -1]], np.int64)
+    assert repeated_pairs(cand) == 1
+    assert repeated_pairs(np.delete(cand, 2, axis=0)) == 0

@@ -409,3 +409,19 @@ def test_escape_depths_beyond_the_anvil_the_hammer_and_the_sides():
     assert escaped_mass(y, gconn, np.array([1.0, 3.0]), -0.6, 0.9) == 1.0
     assert contact_reach({"contact": {"delta_max": 3e-5, "pairs": {"a:b": {"delta_max": 5e-5},
                                                                   "a:c": {"kn0": 1.0}}}}) == 5e-5
+
+
+def test_snapshots_fold_a_periodic_mesh_into_the_box():
+    # An element that drifted a box width and a half out through the right side is drawn at
+    # its image inside the box, and once more a width to either side (cut by the panel)
+    import matplotlib.pyplot as plt
+
+    from pdfem.tools.analysis.plots import _mesh_panel
+
+    x = np.array([[2.4, 0.1], [2.6, 0.1], [2.6, 0.3], [2.4, 0.3]]) * 1e-3
+    conn = np.array([[0, 1, 2, 3]])
+    fig, ax = plt.subplots()
+    pc = _mesh_panel(ax, x, conn, np.ones(1), None, "inferno", (0.0, 0.0, 1.0e-3, 1.0e-3), True)
+    centres = sorted(p.vertices[:4, 0].mean() for p in pc.get_paths())
+    plt.close(fig)
+    assert np.allclose(centres, [-0.5, 0.5, 1.5])

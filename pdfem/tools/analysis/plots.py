@@ -27,9 +27,18 @@ def _save(fig, path, grid_axes=()):
     os.replace(tmp, path)
 
 
-def _mesh_panel(ax, x, conn, values, norm, cmap):
-    """Draw every element of the mesh as a polygon coloured by ``values``; return the artist."""
-    pc = PolyCollection(x[conn] * MM, array=values, cmap=cmap, norm=norm, edgecolors="face",
+def _mesh_panel(ax, x, conn, values, norm, cmap, box=None, periodic=False):
+    """Draw every element of the mesh as a polygon coloured by ``values``; return the artist.
+    With periodic sides each element is folded into the box [x0, y0, x1, y1] and drawn again
+    one box width to either side, so that what crossed a side shows at the other."""
+    poly = x[conn]
+    if periodic:
+        w = box[2] - box[0]
+        poly = poly - (np.floor((poly[:, :, 0].mean(axis=1) - box[0]) / w) * w)[:, None, None] \
+            * np.array([1.0, 0.0])
+        poly = np.concatenate([poly + np.array([k * w, 0.0]) for k in (-1, 0, 1)])
+        values = np.tile(values, 3)
+    pc = PolyCollection(poly * MM, array=values, cmap=cmap, norm=norm, edgecolors="face",
                         linewidths=0.2)
     ax.add_collection(pc)
     ax.set_aspect("equal")
@@ -38,10 +47,11 @@ def _mesh_panel(ax, x, conn, values, norm, cmap):
     return pc
 
 
-def snapshots_plot(frames, conn, path, box=None):
+def snapshots_plot(frames, conn, path, box=None, periodic=False):
     """Element stress (and temperature) panels of a few frames.
 
-    ``frames``: list of (t, x (NN, 2), comp (NE,) compressive stress in Pa, temp (NE,) or None).
+    ``frames``: list of (t, x (NN, 2), comp (NE,) compressive stress in Pa, temp (NE,) or None);
+    with ``periodic`` (sides periodic in x, ``box`` given) the mesh is drawn folded into the box.
     """
     n = len(frames)
     heat = all(f[3] is not None for f in frames)
@@ -53,7 +63,7 @@ def snapshots_plot(frames, conn, path, box=None):
     vmax = max(float(np.percentile(allc, 99.5)), 1e-9)
     norm = matplotlib.colors.Normalize(vmin=0.0, vmax=vmax)
     for i, (t, x, comp, _) in enumerate(frames):
-        pc = _mesh_panel(axes[0, i], x, conn, comp * MPA, norm, "inferno")
+        pc = _mesh_panel(axes[0, i], x, conn, comp * MPA, norm, "inferno", box, periodic)
         axes[0, i].set_title(f"t = {t * US:.2f} us", fontsize=9)
     fig.colorbar(pc, ax=axes[0, :].tolist(), label="-sigma_yy [MPa]", extend="both",
                  fraction=0.04)
@@ -63,7 +73,7 @@ def snapshots_plot(frames, conn, path, box=None):
         allt = np.concatenate([f[3] for f in frames])
         tn = matplotlib.colors.Normalize(vmin=float(allt.min()), vmax=float(allt.max()) + 1e-9)
         for i, (_, x, _, temp) in enumerate(frames):
-            pt = _mesh_panel(axes[1, i], x, conn, temp, tn, "coolwarm")
+            pt = _mesh_panel(axes[1, i], x, conn, temp, tn, "coolwarm", box, periodic)
         fig.colorbar(pt, ax=axes[1, :].tolist(), label="T [K]", fraction=0.04)
         axes[1, 0].set_ylabel("y [mm]")
     # Same window for every panel: the domain box when given

@@ -377,8 +377,9 @@ def _figures(run, s, arrays, prefix):
         k0 = int(np.searchsorted(t, t0)) if t0 is not None and math.isfinite(t0) else 0
         ks = np.unique(np.linspace(min(k0, len(t) - 1), len(t) - 1, 5).round().astype(int))
         frames = [(t[k], *run.frame(k)) for k in ks]
-        plots.snapshots_plot(frames, run.conn, prefix + "-snapshots.png",
-                             box=run.scene["domain"]["box"])
+        dom = run.scene["domain"]
+        plots.snapshots_plot(frames, run.conn, prefix + "-snapshots.png", box=dom["box"],
+                             periodic=dom.get("periodic", "none") == "x")
     plots.gauges_plot(run.gauge_time, run.gauges[sh["hammer_gauge"]],
                       run.gauges[sh["anvil_gauge"]], prefix + "-gauges.png", width=run.width)
     plots.xt_plot(t, run.grain_y, arrays["y_f"], fit, arrays["geo"]["y_top0"], run.hammer_y,

@@ -127,13 +127,13 @@ class Candidates:
         for g in range(g0):
             b = boxes[g]
             rows = own[(boxes[own, 1] <= b[3]) & (boxes[own, 3] >= b[1])]
-            lo, hi = np.zeros(rows.shape[0], np.int64), np.zeros(rows.shape[0], np.int64)
-            if w > 0.0:
-                lo = np.ceil((boxes[rows, 0] - b[2]) / w).astype(np.int64)
-                hi = np.floor((boxes[rows, 2] - b[0]) / w).astype(np.int64)
-            for k in range(int(lo.min(initial=0)), int(hi.max(initial=0)) + 1):
-                near = rows[(lo <= k) & (k <= hi) & (boxes[rows, 0] <= b[2] + k * w)
-                            & (boxes[rows, 2] >= b[0] + k * w)]
+            # The shifts that can bring the block's box over a grain's (0 without a period)
+            k0 = k1 = 0
+            if w > 0.0 and rows.size:
+                k0 = math.ceil((boxes[rows, 0].min() - b[2]) / w)
+                k1 = math.floor((boxes[rows, 2].max() - b[0]) / w)
+            for k in range(k0, k1 + 1):
+                near = rows[(boxes[rows, 0] <= b[2] + k * w) & (boxes[rows, 2] >= b[0] + k * w)]
                 parts.append(np.stack([near, np.full(near.shape[0], g),
                                        np.full(near.shape[0], k)], axis=1))
             for h in range(g + 1, g0):

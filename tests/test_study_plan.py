@@ -97,3 +97,23 @@ def test_speed_rungs_hold_the_piston_until_the_slowest_front_has_crossed():
         held["bc"], plain["bc"] = None, None
         held["time"]["end"] = plain["time"]["end"]
         assert held == plain
+
+
+def test_speed_rungs_sides_periodic_or_walls():
+    """The packaged scenes have periodic sides; study speeds --sides walls puts them between
+    frictionless walls with rollers (both scenes valid), and --sides periodic gives back the
+    packaged scene unchanged."""
+    from pdfem.scene import parse_scene
+    from pdfem.tools.study import speeds as sp
+
+    doc = sp.packaged_doc("small")
+    assert doc["domain"]["periodic"] == "x" and "left" not in doc.get("walls", {})
+    assert sp.periodic_doc(doc) == doc
+    walled = sp.walls_doc(doc)
+    assert "periodic" not in walled["domain"]
+    assert walled["walls"]["left"] == walled["walls"]["right"] == "frictionless"
+    assert [b for b in walled["bc"] if "wall" in b] == [
+        {"wall": "left", "type": "roller"}, {"wall": "right", "type": "roller"}]
+    assert sp.periodic_doc(walled) == {**doc, "walls": {}}
+    for d in (walled, doc):
+        assert parse_scene(sp.rung_doc(d, 1500.0, "2x2", 1), ".", name="rung").resolved

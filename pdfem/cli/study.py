@@ -423,9 +423,9 @@ def _speeds_args(p):
                    "(default the packaged scenes', kite)")
     p.add_argument("--speeds", default=",".join(f"{v:g}" for v in SPEEDS),
                    help="piston speeds [m/s] (default %(default)s)")
-    p.add_argument("--sides", choices=("walls", "periodic"), default="walls", help="the bed's "
-                   "sides: the packaged scenes' frictionless walls, or periodic (domain.periodic "
-                   "= \"x\": no side walls; default walls)")
+    p.add_argument("--sides", choices=("periodic", "walls"), default="periodic", help="the "
+                   "bed's sides: periodic, as in the packaged scenes (domain.periodic = \"x\"), "
+                   "or frictionless side walls (default periodic)")
     _output_args(p, "study-speeds", "<prefix>.json")
 
 
@@ -443,8 +443,7 @@ def _speeds(args):
     speeds = _check(_numbers(args.speeds, "--speeds"), lambda v: 0.0 < v < 1.0e5, "--speeds",
                     "a speed in (0, 1e5) m/s")
     doc = sp.packaged_doc(args.bed)
-    if args.sides == "periodic":
-        doc = sp.periodic_doc(doc)
+    doc = sp.periodic_doc(doc) if args.sides == "periodic" else sp.walls_doc(doc)
     rungs = []
     for level in levels:
         for v in speeds:

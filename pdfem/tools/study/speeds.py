@@ -53,6 +53,18 @@ def periodic_doc(doc):
     return d
 
 
+def walls_doc(doc):
+    """``doc`` between side walls instead of periodic sides: frictionless contact walls left
+    and right with roller conditions on them, as the packaged scenes had (``doc`` is not
+    changed)."""
+    d = copy.deepcopy(doc)
+    d["domain"].pop("periodic", None)
+    d["walls"] = {**d.get("walls", {}), "left": "frictionless", "right": "frictionless"}
+    rollers = [{"wall": side, "type": "roller"} for side in ("left", "right")]
+    d["bc"] = [b for b in d.get("bc", []) if b.get("wall") not in ("left", "right")] + rollers
+    return d
+
+
 def piston_doc(doc, speed, rule, level, mesh=None, hold=0.0):
     """A rung: ``doc`` with the piston at ``speed`` (hammer block and velocity condition),
     its end, release, ramp-down and output intervals scaled by SCENE_SPEED / speed, and the
@@ -111,7 +123,7 @@ def rung_doc(doc, speed, rule, level, mesh=None):
 
 def rung_name(rung):
     """The file stem of a rung's run (a dict of bed, rule, level, velocity and sides)."""
-    sides = "-periodic" if rung.get("sides") == "periodic" else ""
+    sides = "-walls" if rung.get("sides") == "walls" else ""
     return f"{rung['bed']}-{rung['rule']}-l{rung['level']}-v{rung['velocity']:g}{sides}"
 
 

@@ -46,7 +46,9 @@ def _widen(doc, width):
     doc["domain"]["box"][2] = doc["domain"]["box"][0] + width
     for b in doc.get("blocks", []):
         b["box"][2] = b["box"][0] + width
-        b["nx"] = max(1, round(b.get("nx", 3) * width / old))
+        # a block across periodic sides needs 3 elements at least
+        least = 3 if doc["domain"].get("periodic") == "x" else 1
+        b["nx"] = max(least, round(b.get("nx", 3) * width / old))
 
 
 def scenes(width, seed, folder):

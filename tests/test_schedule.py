@@ -50,7 +50,7 @@ def test_ramp_below_the_advance_at_release_refused():
         bc = next(b for b in doc["bc"] if "release" in b)
         bc["ramp_down"] = 1e-30
 
-    with pytest.raises(InputError, match=r"bc\[3\]\.ramp_down: 1e-30 s is below the smallest "
+    with pytest.raises(InputError, match=r"bc\[1\]\.ramp_down: 1e-30 s is below the smallest "
                        "advance of the time"):
         parse_scene(_scene(edit))
 

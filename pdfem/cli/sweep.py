@@ -163,6 +163,15 @@ def run(args):
                 points.append(_stopped(v, exc, bed, v / (1.0 - phi0)))
                 print(f"  stopped: {exc}", flush=True)
             continue
+        if summary["stopped"]:
+            # Stopped by a signal: the run file is not finished and no speed after it starts
+            if comm.rank == 0:
+                print(f"pdfem sweep: the run at {v:g} m/s was stopped by a signal at "
+                      f"t={summary['time']:.6e} s (step {summary['steps']}); its checkpoint is "
+                      f"{summary['checkpoint']}; the speeds after it were not run and no table "
+                      "was written", flush=True)
+            barrier(comm)
+            return 3
         if comm.rank == 0:
             s = analyse(out, os.path.splitext(out)[0])
             points.append(_point(v, s, summary))
@@ -173,6 +182,9 @@ def run(args):
                   f"compacted crystal Us >= {_f(p['us_min'])} m/s, rho1 <= {_f(p['rho1_max'])} "
                   f"kg/m3: {'kept' if p['bound_kept'] else 'BROKEN'}", flush=True)
     static = _static(args, static, sh, H0, phi0, width, comm) if args.static else None
+    if static is STOPPED:
+        barrier(comm)
+        return 3
     if comm.rank == 0:
         from pdfem.tools.analysis.summary import _plain
 
@@ -193,6 +205,10 @@ def run(args):
     return 3 if stops else 0
 
 
+# What _static returns for a static run stopped by a signal
+STOPPED = object()
+
+
 def _static_scene(scene, doc, sh, H0, phi0):
     """The checked scene of the static compression run and its snowplow stress floor."""
     from pdfem.scene import parse_scene
@@ -204,7 +220,7 @@ def _static_scene(scene, doc, sh, H0, phi0):
 
 def _static(args, static, sh, H0, phi0, width, comm):
     """The static compression run of ``static`` (its scene and stress floor) and its curve
-    (rank 0)."""
+    (rank 0; None elsewhere; STOPPED on every rank when a signal stopped it)."""
     from pdfem.driver import run as drive
     from pdfem.solver import Simulation
     from pdfem.tools.study import hugoniot as hg
@@ -216,6 +232,12 @@ def _static(args, static, sh, H0, phi0, width, comm):
               f"{hg.STATIC_SPEED:g} m/s, snowplow floor {floor * 1e-6:.2f} MPa) -> {out}",
               flush=True)
     summary = drive(Simulation(sc, comm), out, quiet=True)
+    if summary["stopped"]:
+        if comm.rank == 0:
+            print(f"pdfem sweep: the static compression was stopped by a signal at "
+                  f"t={summary['time']:.6e} s (step {summary['steps']}); its checkpoint is "
+                  f"{summary['checkpoint']}; no table was written", flush=True)
+        return STOPPED
     if comm.rank != 0:
         return None
     rho_s = sh["solid_density"]

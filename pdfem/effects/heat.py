@@ -215,7 +215,7 @@ class Heat(Effect):
                     if bad >= 0:
                         ctx.fail(f"check inverted element: element {s.elem_loc[bad]} of "
                                  f"body {s.elem_gid[bad]} is inverted (heat conduction)")
-                advance_temperature(s.T, self.q, self.src, s.tcap, h, s.nn_own)
+                advance_temperature(s.T, self.q, self.src, s.tcap, h, s.nn_own, ctx.partner)
                 hold_temperature(s.T, s.tcap, s.tfix, s.tfixv, s.node_body, s.nn_own, s.hacc,
                                  HACC_BC)
 

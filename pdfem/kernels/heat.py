@@ -178,11 +178,26 @@ def element_heat(x, temp, conn, emat, mat_params, sig, ewp, ewp_prev, ewq, ewq_p
 
 
 @njit(cache=True)
-def advance_temperature(temp, q, src, cap, dt, n1):
-    """T_I += (dt q_I + src_I) / C_I for nodes [0, n1); q and src are then cleared."""
+def advance_temperature(temp, q, src, cap, dt, n1, partner):
+    """T_I += (dt q_I + src_I) / C_I for nodes [0, n1); q and src are then cleared.
+
+    partner (np,) ties node i < np to node partner[i] (-1: none; periodic sides: a block's
+    left and right columns): both take the increment of their summed heat over their summed
+    capacity, added in the order of the lower index, so that they keep one temperature and
+    each books C_I of the pair's heat. Shape (0,): no ties.
+    """
+    ntied = partner.shape[0]
     for i in range(n1):
-        if cap[i] > 0.0:
+        p = partner[i] if i < ntied else -1
+        if p >= 0:
+            lo, hi = min(i, p), max(i, p)
+            c = cap[lo] + cap[hi]
+            if c > 0.0:
+                temp[i] += (dt * (q[lo] + q[hi]) + (src[lo] + src[hi])) / c
+        elif cap[i] > 0.0:
             temp[i] += (dt * q[i] + src[i]) / cap[i]
+    # Cleared once every node has read its partner's heat
+    for i in range(n1):
         q[i] = 0.0
         src[i] = 0.0
 

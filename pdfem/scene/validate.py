@@ -164,8 +164,7 @@ def _domain_rules(d):
 def _periodic_rules(r):
     """Periodic sides in x: no side walls or conditions on them; each block spans the box in x
     with at least three elements (its left and right node columns become one), and no condition
-    or held temperature on one of those columns alone; no conduction in blocks (the seam's
-    heat flux is not tied)."""
+    or held temperature on one of those columns alone."""
     x0, _, x1, _ = r["domain"]["box"]
     for side in ("left", "right"):
         if r.get("walls", {}).get(side, "none") != "none":
@@ -190,9 +189,6 @@ def _periodic_rules(r):
         if b["nx"] < 3:
             raise SceneError(f"blocks[{i}].nx", 'must be >= 3 with domain.periodic = "x" (got '
                              f'{b["nx"]}): two elements meet at one image only')
-    if r["blocks"] and "conduction" in r:
-        raise SceneError("conduction", 'not available with blocks and domain.periodic = "x" '
-                         "(the heat flux across a block's seam is not tied)")
 
 
 def _materials(value):

@@ -189,8 +189,11 @@ def test_prepare_never_overwrites_without_force(tmp_path):
 def test_sweep_on_2_ranks(small_bed, tmp_path):
     """Two piston speeds and the static compression on a bed 1 mm deep: the harder blow
     drives a faster front at a higher stress and density; rows carry the snowplow bound;
-    the static curve rises to the grains' density."""
-    doc = small_shock(small_bed)
+    the static curve rises to the grains' density. Between side walls: this bed's largest
+    grains make the contact cells 0.34 mm, and periodic sides need 3 across the 1 mm box."""
+    from pdfem.tools.study.speeds import walls_doc
+
+    doc = walls_doc(small_shock(small_bed))
     write_scene(tmp_path / "p.toml", small_prepare(height=1.0e-3))
     p = pdfem(["prepare", "p.toml", "-o", "thin.h5"], tmp_path)
     assert p.returncode == 0, p.stderr
@@ -259,3 +262,35 @@ def test_sweep_refuses_a_bad_level(small_bed, tmp_path):
         assert p.returncode == 2 and msg in p.stderr, p.stderr
         assert len(p.stderr.strip().splitlines()) == 1
     assert not list(tmp_path.glob("sweep*"))
+
+
+def test_sweep_stopped_by_sigterm_names_the_checkpoint(small_bed, tmp_path):
+    """SIGTERM during a speed's run: the run writes its checkpoint, the sweep says where it is,
+    starts no further speed, writes no table and exits 3 (it used to go on to analyse the
+    unfinished run file and end on "cannot read the run file")."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from tests.helpers import ROOT
+
+    write_scene(tmp_path / "s.toml", small_shock(small_bed))
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-m", "pdfem", "sweep", "s.toml", "--velocities",
+                             "250,500", "--level", "1", "-p", "sw"], cwd=tmp_path, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    part = tmp_path / "sw-v250.h5.part"
+    t0 = time.time()
+    while not part.exists():
+        assert time.time() - t0 < 120 and proc.poll() is None
+        time.sleep(0.01)
+    time.sleep(0.2)
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 3, err
+    assert "its checkpoint is sw-v250.h5.ckpt.h5" in out
+    assert (tmp_path / "sw-v250.h5.ckpt.h5").is_file()
+    assert "the speeds after it were not run" in out and "cannot read" not in out + err
+    assert not list(tmp_path.glob("sw-v500*")) and not (tmp_path / "sw.json").exists()

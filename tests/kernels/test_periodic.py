@@ -133,6 +133,33 @@ def test_tied_block_columns_move_as_one_and_book_their_own_energy():
     assert joint_masses(m, np.zeros(0, np.int64)) is m
 
 
+def test_tied_block_columns_keep_one_temperature_and_the_pair_s_heat():
+    # Unequal conducted heat and sources on the two tied columns: both take the increment of
+    # the summed heat over the summed capacity (one temperature), the thermal energy gained is
+    # exactly the heat given, and free nodes are updated as without ties (bit for bit)
+    from pdfem.kernels.heat import advance_temperature
+
+    _, _, _, sets = block_mesh(0.0, 0.0, 3.0, 1.0, 3, 1)
+    partner = tied_nodes([sets], np.array([0]), 8)
+    rng = np.random.default_rng(5)
+    cap = rng.uniform(1.0, 2.0, 8)
+    q, src = rng.normal(0.0, 1.0, 8), rng.normal(0.0, 1.0e-3, 8)
+    temp = np.full(8, 300.0)
+    heat = 1e-3 * q.sum() + src.sum()
+    plain = temp.copy()
+    advance_temperature(plain, q.copy(), src.copy(), cap, 1e-3, 8, np.zeros(0, np.int64))
+    qq, ss = q.copy(), src.copy()
+    advance_temperature(temp, qq, ss, cap, 1e-3, 8, partner)
+    assert not qq.any() and not ss.any()
+    for i, p in ((0, 3), (4, 7)):
+        assert temp[i] == temp[p]
+        want = 300.0 + (1e-3 * (q[i] + q[p]) + src[i] + src[p]) / (cap[i] + cap[p])
+        assert np.isclose(temp[i], want, rtol=1e-15, atol=0.0)
+    free = [1, 2, 5, 6]
+    assert temp[free].tobytes() == plain[free].tobytes()
+    assert np.isclose(np.sum(cap * (temp - 300.0)), heat, rtol=1e-12)
+
+
 def test_prepared_grains_are_written_as_their_images_in_the_box():
     from pdfem.prepare.phases import wrap_into_box
 

@@ -16,7 +16,7 @@ import numpy as np
 from pdfem.io.bedfile import write_bed
 from pdfem.mesh.ellipse import ellipse_mesh, place
 from pdfem.mesh.quality import jacobian_ratio
-from pdfem.tools.study.speeds import packaged_doc, rung_doc
+from pdfem.tools.study.speeds import packaged_doc, rung_doc, walls_doc
 
 # The elastic grain of the non-shock cases (HMX-like moduli)
 GRAIN = {"model": "elastic", "density": 1900.0, "bulk": 12.7e9, "shear": 4.4e9}
@@ -98,12 +98,14 @@ def piston_2000_eos(folder, size):
 
 def piston_1500_potential(folder, size):
     """The piston at 1500 m/s on the scene's own kite meshes with the potential contact law:
-    level 2 with the linear bulk for 0.13 us at CI size (past the area law's stop at 0.119
-    us, an element inside another); level 3 to the scene's end for large, the crystal on its
-    Hugoniot (with the linear bulk the crushed crystal inverts an element at 0.84 us)."""
+    at CI size level 2 with the linear bulk between the side walls the packaged scene had,
+    for 0.13 us (past the area law's stop at 0.119 us there, an element inside another; with
+    periodic sides the linear bulk inverts a grain's tip at 0.104 us); level 3 to the scene's
+    end for large, the crystal on its Hugoniot (with the linear bulk the crushed crystal
+    inverts an element at 0.84 us)."""
     if size == "ci":
-        return _piston(size, 1500.0, 3, level_ci=2, end_ci=1.3e-7, mesh="kite", eos=False,
-                       law="potential")
+        return walls_doc(_piston(size, 1500.0, 3, level_ci=2, end_ci=1.3e-7, mesh="kite",
+                                 eos=False, law="potential"))
     return _piston(size, 1500.0, 3, mesh="kite", eos=True, law="potential")
 
 

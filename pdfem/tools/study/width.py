@@ -3,7 +3,10 @@ in beds of several widths and, at one width, several seeds.
 
 Each bed is the packaged geometric preparation (``shot912_prepare.toml``: 0.65 of HMX at
 1900 kg/m^3, 4 mm deep) at another width and seed, and each run the packaged impact scene
-(``shot912.toml``) on it, with its chamber, hammer and bottom as wide as the bed. A width is
+(``shot912.toml``) on it, with its chamber, hammer and bottom as wide as the bed, between
+frictionless side walls as the bed was packed (the scene's periodic sides need a bed at least
+three contact cells wide, just over 1.0 mm with these grains, and the study starts at 4
+grains, 1 mm). A width is
 counted in grains: the packaged bed's width per grain (4 mm for 16, NOMINAL), close to its
 mean grain diameter (0.245 mm). Runs end when the piston is released: the study measures
 the wave, not the spring-back.
@@ -19,6 +22,7 @@ import numpy as np
 
 from pdfem.parallel.mpi import barrier
 from pdfem.scene.toml_out import dumps
+from pdfem.tools.study.speeds import walls_doc
 
 PREP, SCENE = "shot912_prepare.toml", "shot912.toml"
 # Bed width per grain of the packaged bed (4 mm, 16 grains)
@@ -46,9 +50,7 @@ def _widen(doc, width):
     doc["domain"]["box"][2] = doc["domain"]["box"][0] + width
     for b in doc.get("blocks", []):
         b["box"][2] = b["box"][0] + width
-        # a block across periodic sides needs 3 elements at least
-        least = 3 if doc["domain"].get("periodic") == "x" else 1
-        b["nx"] = max(least, round(b.get("nx", 3) * width / old))
+        b["nx"] = max(1, round(b.get("nx", 3) * width / old))
 
 
 def scenes(width, seed, folder):
@@ -57,6 +59,7 @@ def scenes(width, seed, folder):
     tag)."""
     prep, _ = _packaged(PREP)
     shot, base = _packaged(SCENE)
+    shot = walls_doc(shot)
     tag = f"w{width / NOMINAL:g}-s{seed}"
     bed = os.path.abspath(os.path.join(folder, f"bed-{tag}.h5"))
     _widen(prep, width)

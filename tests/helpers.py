@@ -44,3 +44,22 @@ def datasets(path):
         f.visititems(lambda n, o: out.__setitem__(n, o[()])
                      if isinstance(o, h5py.Dataset) else None)
     return out
+
+
+def sigterm_when(args, cwd, part):
+    """Run ``python -m pdfem args`` in ``cwd`` (1 process), send it SIGTERM 0.2 s after the
+    file ``part`` appears (within 120 s), and return (exit status, stdout, stderr)."""
+    import signal
+    import time
+
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    proc = subprocess.Popen([sys.executable, "-m", "pdfem", *args], cwd=cwd, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    t0 = time.time()
+    while not part.exists():
+        assert time.time() - t0 < 120 and proc.poll() is None
+        time.sleep(0.01)
+    time.sleep(0.2)
+    proc.send_signal(signal.SIGTERM)
+    out, err = proc.communicate(timeout=120)
+    return proc.returncode, out, err

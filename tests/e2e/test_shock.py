@@ -12,7 +12,7 @@ import h5py
 import numpy as np
 import pytest
 
-from tests.helpers import datasets, pdfem
+from tests.helpers import datasets, pdfem, sigterm_when
 from tests.scenes import prep_scene, shock_scene, small_prepare, small_shock, write_scene
 
 
@@ -268,28 +268,10 @@ def test_sweep_stopped_by_sigterm_names_the_checkpoint(small_bed, tmp_path):
     """SIGTERM during a speed's run: the run writes its checkpoint, the sweep says where it is,
     starts no further speed, writes no table and exits 3 (it used to go on to analyse the
     unfinished run file and end on "cannot read the run file")."""
-    import os
-    import signal
-    import subprocess
-    import sys
-    import time
-
-    from tests.helpers import ROOT
-
     write_scene(tmp_path / "s.toml", small_shock(small_bed))
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen([sys.executable, "-m", "pdfem", "sweep", "s.toml", "--velocities",
-                             "250,500", "--level", "1", "-p", "sw"], cwd=tmp_path, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    part = tmp_path / "sw-v250.h5.part"
-    t0 = time.time()
-    while not part.exists():
-        assert time.time() - t0 < 120 and proc.poll() is None
-        time.sleep(0.01)
-    time.sleep(0.2)
-    proc.send_signal(signal.SIGTERM)
-    out, err = proc.communicate(timeout=120)
-    assert proc.returncode == 3, err
+    code, out, err = sigterm_when(["sweep", "s.toml", "--velocities", "250,500", "--level", "1",
+                                   "-p", "sw"], tmp_path, tmp_path / "sw-v250.h5.part")
+    assert code == 3, err
     assert "its checkpoint is sw-v250.h5.ckpt.h5" in out
     assert (tmp_path / "sw-v250.h5.ckpt.h5").is_file()
     assert "the speeds after it were not run" in out and "cannot read" not in out + err

@@ -7,7 +7,7 @@ import re
 
 import pytest
 
-from tests.helpers import ROOT, pdfem
+from tests.helpers import pdfem, sigterm_when
 from tests.scenes import drifting_grains, write_scene
 
 COLUMNS = ["run", "axis", "level", "quads_per_grain", "rule", "safety", "kn0_scale", "wall_s",
@@ -135,25 +135,11 @@ def test_speeds_study_stopped_by_sigterm_names_the_checkpoint(tmp_path):
     """SIGTERM during a rung: the run writes its checkpoint, the study says so and where it
     is, starts no further rung and exits 3 (it used to go on to analyse the unfinished run
     file and end on "cannot read the run file")."""
-    import os
-    import signal
-    import subprocess
-    import sys
-    import time
 
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    proc = subprocess.Popen([sys.executable, "-m", "pdfem", "study", "speeds", "--rule", "1pt",
-                             "--levels", "1", "--speeds", "1500,2000"], cwd=tmp_path, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     part = tmp_path / "study-speeds-runs" / "small-1pt-l1-v1500.h5.part"
-    t0 = time.time()
-    while not part.exists():
-        assert time.time() - t0 < 120 and proc.poll() is None
-        time.sleep(0.01)
-    time.sleep(0.2)
-    proc.send_signal(signal.SIGTERM)
-    out, err = proc.communicate(timeout=120)
-    assert proc.returncode == 3, err
+    code, out, err = sigterm_when(["study", "speeds", "--rule", "1pt", "--levels", "1",
+                                   "--speeds", "1500,2000"], tmp_path, part)
+    assert code == 3, err
     ckpt = "study-speeds-runs/small-1pt-l1-v1500.h5.ckpt.h5"
     assert (tmp_path / ckpt).is_file() and f"its checkpoint is {ckpt}" in out
     assert "the rungs after it were not run" in out and "cannot read" not in out + err

@@ -137,6 +137,7 @@ def run(args):
     from pdfem.solver import Simulation
     from pdfem.tools.analysis import analyse
     from pdfem.tools.analysis.plots import sweep_plot
+    from pdfem.tools.analysis.summary import bound_word
 
     comm = world()
     check_ranks(scene, comm.size)
@@ -180,7 +181,7 @@ def run(args):
                   + f", precursor {_f(p['precursor'])} m/s, up {_f(p['up'])} m/s, rho1 "
                   f"{_f(p['rho1'])} kg/m3, stress {_f(p['sigma'], 1e-6)} MPa; bound of the "
                   f"compacted crystal Us >= {_f(p['us_min'])} m/s, rho1 <= {_f(p['rho1_max'])} "
-                  f"kg/m3: {'kept' if p['bound_kept'] else 'BROKEN'}", flush=True)
+                  f"kg/m3: {bound_word(p['bound_kept'])}", flush=True)
     static = _static(args, static, sh, H0, phi0, width, comm) if args.static else None
     if static is STOPPED:
         barrier(comm)
@@ -273,7 +274,7 @@ def _checks(points):
                  else "below the snowplow speed (rigid grains; no bound for grains that compress): "
                  + ", ".join(f"{p['velocity']:g} m/s (Us {p['us']:.0f} < "
                              f"{p['snowplow_us']:.0f})" for p in below))
-    broken = [p for p in ok if not p["bound_kept"]]
+    broken = [p for p in ok if p["bound_kept"] is False]
     lines.append("every steady front keeps the bound of the bed compacted to its grains' own "
                  "compression" if not broken else "the bound of the bed compacted to its "
                  "grains' own compression is broken (not a state of this bed): " + ", ".join(

@@ -6,6 +6,8 @@ The grains "behind the front" (the shocked grains) at a frame are those whose ce
 between the front y_f and the hammer face.
 """
 
+import math
+
 import numpy as np
 
 NAN = float("nan")
@@ -273,11 +275,13 @@ def compacted_density(sigma, rho_s, material):
 def crystal_bound(up, sigma, us, us_se, rho0, rho1, rho_s, material):
     """The bound of a bed compacted to :func:`compacted_density` at the measured stress:
     rho1 <= rho_max and Us >= up / (1 - rho0/rho_max); whether the measured front keeps it
-    (Us within one standard error of its bound counts as kept)."""
+    (Us within one standard error of its bound counts as kept); kept is None where no front
+    was measured (Us, up or rho1 not finite): nothing to check."""
     rho_max = compacted_density(sigma, rho_s, material)
     us_min = up / (1.0 - rho0 / rho_max) if rho_max > rho0 else NAN
+    measured = all(math.isfinite(float(q)) for q in (up, us, rho1))
     return {"rho1_max": rho_max, "us_min": float(us_min),
-            "kept": bool(rho1 <= rho_max and us + us_se >= us_min)}
+            "kept": bool(rho1 <= rho_max and us + us_se >= us_min) if measured else None}
 
 
 def snowplow(up, rho0, rho_s):

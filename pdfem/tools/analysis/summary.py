@@ -316,7 +316,7 @@ def report_text(s):
         f"{_f(sn['us_at_impact_speed'])} m/s",
         f"bed compacted to its grains' own compression at the measured stress: rho1 <= "
         f"{_f(bd['rho1_max'])} kg/m3, Us >= {_f(bd['us_min'])} m/s: "
-        + ("kept" if bd["kept"] else "BROKEN (not a state of this bed)"),
+        + bound_word(bd["kept"], "BROKEN (not a state of this bed)"),
         f"grain meshes: {_f(m['folded_front'], 100, '.2f')} % of the grains' area in folded "
         f"corners while the front crosses, {_f(m['folded_end'], 100, '.2f')} % at the end"
         + ("" if m["folded_max"] <= FOLDED_LIMIT else
@@ -438,3 +438,8 @@ def _census(path, prefix, plots):
             "area_fraction": region["area_fraction"],
             "most_spots": most["whole"]["n_spots"], "most_spots_time": most["time"],
             "heat_fields": result["heat_fields"]}
+
+
+def bound_word(kept, broken="BROKEN", none="n/a (no front)"):
+    """How a bound check reads: kept, ``broken``, or ``none`` where no front was measured."""
+    return none if kept is None else ("kept" if kept else broken)

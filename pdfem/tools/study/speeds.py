@@ -26,6 +26,7 @@ import tomllib
 from importlib import resources
 
 from pdfem.errors import InputError
+from pdfem.tools.analysis.summary import bound_word
 
 # The packaged beds and the speed their times are written for [m/s]
 BEDS = {"small": "shot912_small.toml", "default": "shot912.toml"}
@@ -165,7 +166,7 @@ def table_lines(rows):
                    f"{_pct(r['folded']):>7s}  {r['us']:7.1f} +- {r['us_se']:5.1f}  "
                    f"{r['up']:8.1f}  {r['sigma'] * 1e-9:11.3f}  {r['rho1']:7.0f} "
                    f"({r['rho1_max']:5.0f})    {r['us_min']:8.0f}  "
-                   f"{'kept' if r['bound_kept'] else 'BROKEN':6s}  {r['arrival'] * 1e6:12.4f}  "
+                   f"{bound_word(r['bound_kept'], none='n/a'):6s}  {r['arrival'] * 1e6:12.4f}  "
                    f"{r['compaction']:10.3f}  {_pct(r['interpenetrated']):>15s}  "
                    f"{r['escape'] * 1e6:7.1f}"
                    + (f" ({_pct(r['escaped_mass'], 3)}) ESCAPED" if r["escaped"] else ""))

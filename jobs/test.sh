@@ -7,5 +7,5 @@ bash jobs/install.sh
 . .venv/bin/activate
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 ruff check pdfem partition tests
-python -m pytest -q -p no:cacheprovider "$@"
+python -m pytest -q -p no:cacheprovider --durations=30 "$@"
 timeout 900 bash jobs/mpirun.sh -n 2 python -m pytest -q -p no:cacheprovider --with-mpi tests/mpi

@@ -432,3 +432,18 @@ def test_snapshots_fold_a_periodic_mesh_into_the_box():
     centres = sorted(p.vertices[:4, 0].mean() for p in pc.get_paths())
     plt.close(fig)
     assert np.allclose(centres, [-0.5, 0.5, 1.5])
+
+
+def test_escape_line_says_whether_the_material_came_back():
+    """The summary's escape line calls grain material past the anvil lost only while some of it
+    is still past at the end; a corner pressed in and out again is said to be back."""
+    from pdfem.tools.analysis.summary import _escape_line
+
+    e = {"below_anvil": 42e-6, "above_hammer": 1e-6, "reach": 30e-6, "past_sides": None,
+         "escaped": True, "mass": 4.7e-4, "t_mass": 0.44e-6, "mass_end": 0.0}
+    line = _escape_line(e)
+    assert "periodic sides" in line and "all back by the end" in line
+    assert "lost" not in line
+    line = _escape_line(dict(e, mass_end=1e-4, past_sides=2e-6))
+    assert line.endswith("lost to the bed") and "2.0 um past the box's sides" in line
+    assert "gone past" not in _escape_line(dict(e, escaped=False))

@@ -467,11 +467,13 @@ def _speeds(args):
     rows, stops = sp.run_rungs(rungs, folder, comm, log=lambda m: print(m, flush=True))
     if comm.rank == 0:
         from pdfem.tools.analysis.summary import _plain
+        from pdfem.tools.provenance import provenance
 
         print("", *sp.table_lines(rows), sep="\n")
         with open(args.prefix + ".json.part", "w") as f:
             json.dump(_plain({"bed": args.bed, "rule": args.rule, "mesh": args.mesh or "kite",
-                              "sides": args.sides, "rows": rows}), f, indent=1)
+                              "sides": args.sides, "provenance": provenance(comm.size),
+                              "rows": rows}), f, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         lost = sum(1 for r in rows if r["runs"] and r["escaped"])
         print(f"pdfem study speeds: {len(rows) - stops} of {len(rows)} runs reach the scene's "

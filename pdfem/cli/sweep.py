@@ -188,11 +188,12 @@ def run(args):
         return 3
     if comm.rank == 0:
         from pdfem.tools.analysis.summary import _plain
+        from pdfem.tools.provenance import provenance
 
         checks = _checks(points)
         for line in checks:
             print(f"pdfem sweep: {line}", flush=True)
-        body = {"points": points, "checks": checks,
+        body = {"provenance": provenance(comm.size), "points": points, "checks": checks,
                 "static": None if static is None else {k: v for k, v in static.items()}}
         with open(args.prefix + ".json.part", "w") as fh:
             json.dump(_plain(body), fh, indent=1)

@@ -110,8 +110,12 @@ def test_speeds_study_on_2_ranks(tmp_path):
     p = pdfem(["study", "speeds", "--rule", "1pt", "--levels", "1", "--speeds", "1500"],
               tmp_path, ranks=2)
     assert p.returncode == 0, p.stderr
-    rows = json.loads((tmp_path / "study-speeds.json").read_text())["rows"]
+    body = json.loads((tmp_path / "study-speeds.json").read_text())
+    rows = body["rows"]
     assert len(rows) == 1 and rows[0]["runs"] and rows[0]["velocity"] == 1500.0
+    # Where the rows came from: the ranks and the machine line beside them
+    prov = body["provenance"]
+    assert prov["ranks"] == 2 and prov["machine"].endswith("2 rank(s)") and "UTC" in prov["date"]
     r = rows[0]
     # Measured 2026-12-06 (commit a820b7d, the points hourglass stiffness): Us 3429.2 m/s,
     # 0.11 % balance error, 0.21 % of the area folded (2.7 % with the coefficient spring)

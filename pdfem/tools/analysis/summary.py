@@ -35,7 +35,7 @@ def _escape_line(e):
         line += (f": grain material has gone past the anvil or the hammer, at most "
                  f"{_f(e['mass'], 100, '.3f')} % of the grains' mass in elements reaching past "
                  f"(at {_f(e['t_mass'], 1e6, '.3f')} us; {_f(e['mass_end'], 100, '.3f')} % at the "
-                 "end), lost to the bed")
+                 "end)" + (", lost to the bed" if e["mass_end"] > 0 else ", all back by the end"))
     return line
 
 

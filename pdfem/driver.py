@@ -11,7 +11,7 @@ from pdfem.errors import SimulationError
 from pdfem.guards import advice
 from pdfem.io.restart import catch_sigterm
 from pdfem.output import RunOutput
-from pdfem.parallel.mpi import broadcast
+from pdfem.parallel.mpi import broadcast, global_sum
 
 
 def run(sim, out_path, quiet=False, log=print):
@@ -89,10 +89,19 @@ def _run(sim, out_path, quiet, log):
                "checkpoint": output.ckpt.path if stopped else None,
                "phases": report, "effects": sim.effect_names, "ranks": comm.size,
                "imbalance": sim.timers.imbalance(comm), "rebalances": sim.rebalances,
-               "remedies": list(guards.actions)}
+               "remedies": list(guards.actions), "skipped_at_rest": _skipped(sim, comm)}
     if comm.rank == 0 and not quiet:
         _report(summary, log)
     return summary
+
+
+def _skipped(sim, comm):
+    """Share of the 2x2 element updates of the run skipped at rest, over all ranks (None with
+    the 1-point rule, which computes every element, or with element.skip_rest = false)."""
+    if sim.nip == 1 or sim.rest is None:
+        return None
+    n = global_sum(comm, sim.element_steps)
+    return global_sum(comm, int(sim.rest.sum())) / n if n > 0 else 0.0
 
 
 def _step(sim, output):
@@ -171,6 +180,9 @@ def _report(summary, log):
         f"{summary['balance_error']:.3e}; effects: {', '.join(summary['effects']) or 'none'}")
     log(f"load imbalance (max/mean busy time over ranks): {summary['imbalance']:.3f}; "
         f"rebalanced {summary['rebalances']} time(s)")
+    if summary["skipped_at_rest"] is not None:
+        log(f"element updates skipped at rest (unmoved, unloaded): "
+            f"{100 * summary['skipped_at_rest']:.1f} %")
     log("phase                 min [s]    avg [s]    max [s]")
     for p, (lo, avg, hi) in summary["phases"].items():
         if hi > 0:

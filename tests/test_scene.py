@@ -89,7 +89,8 @@ def test_minimal_scene_defaults(tmp_path, monkeypatch):
     assert r["time"] == {"end": 1e-5, "safety": 0.5, "dt_max": math.inf, "dt_min": 0.0,
                          "max_steps": 0}
     assert r["element"] == {"rule": "1pt", "hourglass_stiffness": "coefficient",
-                            "hourglass": 0.05, "level": 1, "mesh": "kite"}
+                            "hourglass": 0.05, "level": 1, "skip_rest": True,
+                            "mesh": "kite"}
     assert r["materials"]["glass"]["model"] == "elastic"
     assert r["grains"][0]["angle"] == 0.0 and r["grains"][0]["velocity"] == [0.0, 0.0]
     # Auto skin = 0.1 x smallest minor diameter; auto cell = largest diameter + skin
@@ -276,6 +277,8 @@ MISTAKES = [
     ("wrong type", _set(("time", "end"), "1e-5"), "time.end: expected a number"),
     ("bool for number", _set(("damping", "gamma"), True), "damping.gamma: expected a number"),
     ("float for int", _set(("time", "max_steps"), 1.5), "time.max_steps: expected an integer"),
+    ("int for bool", _set(("element", "skip_rest"), 1),
+     "element.skip_rest: expected true or false (got 1)"),
     ("short vector", _set(("gravity", "g"), [0.0]), "gravity.g: expected [x, y]"),
     ("negative density", _set(("materials", "glass", "density"), -1),
      "materials.glass.density: must be > 0 (got -1.0)"),

@@ -102,7 +102,8 @@ def shock_report(out, summary, comm, quiet):
     if comm.rank == 0:
         t0 = time.perf_counter()
         extra = {"wall_s": summary["wall_s"], "steps": summary["steps"], "ranks": comm.size,
-                 "phases": {k: float(v[2]) for k, v in summary["phases"].items()}}
+                 "phases": {k: float(v[2]) for k, v in summary["phases"].items()},
+                 "skipped_at_rest": summary["skipped_at_rest"]}
         result = analyse(out, prefix_of(out), extra=extra)
         if not quiet:
             print(report_text(result))

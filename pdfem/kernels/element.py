@@ -170,13 +170,34 @@ def _scatter(conn, e, fe, f):
 
 
 @njit(cache=True)
+def unloaded_at_rest(du, conn, sig, eth, e, has_th):
+    """Element e has not moved this step (du zero at its four nodes), carries no stress at any
+    point and no temperature change: its update would leave its stress, state and work as
+    they are and add zero force (the cap and elastic updates of a zero increment from zero
+    stress are elastic and exact; the cap's parameter checks keep zero stress inside)."""
+    if has_th and eth[e, 0] != 0.0:
+        return False
+    for i in range(4):
+        n = conn[e, i]
+        if du[n, 0] != 0.0 or du[n, 1] != 0.0:
+            return False
+    for ip in range(sig.shape[1]):
+        for k in range(4):
+            if sig[e, ip, k] != 0.0:
+                return False
+    return True
+
+
+@njit(cache=True)
 def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, e1,
-                  f, ewint, ewp, eth):
+                  f, ewint, ewp, eth, rest=None):
     """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hg and hg_model are ignored.
 
     Updates sig (ne,4,4) and mstate per point; subtracts internal forces from f element by
     element; adds stress work to ewint and plastic work to ewp (weights x current det J).
     eth (ne, 3) couples temperature in (see thermal_row); shape (0, 3) leaves it out.
+    rest, an int64 array (1,), skips the elements unloaded at rest (unloaded_at_rest) and adds
+    their count to rest[0]; None (the default) computes every element.
     Returns -1, or the first element with a non-positive IP Jacobian or a failed material.
     """
     if sig.shape[1] != 4:
@@ -196,6 +217,10 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, 
     has_state = mstate.shape[0] > 0
     has_th = eth.shape[0] > 0
     for e in range(e0, e1):
+        # An element at rest and unloaded: computing it would change nothing
+        if rest is not None and unloaded_at_rest(du, conn, sig, eth, e, has_th):
+            rest[0] += 1
+            continue
         p, dth = thermal_row(mat_params[emat[e]], eth, e, has_th, pbuf)
         _gather(x, du, conn, e, xc, xm, ue)
         for i in range(4):

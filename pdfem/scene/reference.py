@@ -9,8 +9,9 @@ import math
 
 from pdfem.scene import schema as S
 
-_TYPES = {"float": "float", "int": "int", "str": "string", "vec2": "[float, float]",
-          "box": "[float, float, float, float]", "strlist": "list of strings"}
+_TYPES = {"float": "float", "int": "int", "str": "string", "bool": "true or false",
+          "vec2": "[float, float]", "box": "[float, float, float, float]",
+          "strlist": "list of strings"}
 
 _INTRO = """\
 # Scene file reference
@@ -47,6 +48,8 @@ def _default(key):
         return "*absent*"
     if isinstance(d, S.Derived):
         return d.text
+    if isinstance(d, bool):
+        return "true" if d else "false"
     if isinstance(d, float) and math.isinf(d):
         return "inf"
     if isinstance(d, str):

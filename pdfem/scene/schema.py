@@ -66,6 +66,9 @@ ELEMENT = {
                      '"coefficient" only)', lo=0.0, hi=0.5),
     "level": Key("int", 1, "grain mesh refinement: each grain has 6 level^2 quads (kite) or "
                  "6 level^2 + 12 level (ring)", lo=1, hi=10),
+    "skip_rest": Key("bool", True, "2x2 rule: skip an element that has not moved this step "
+                     "and carries no stress (a grain ahead of the front); the same bits as "
+                     "computing it, which false does"),
     "mesh": Key("str", "kite", "grain mesh: the report's six kites subdivided, or a kite core "
                 "inside a ring of boundary quads (every boundary node on two elements)",
                 choices=("kite", "ring")),

@@ -98,6 +98,10 @@ def _check(value, key):
         return int(value)
     if kind == "str":
         return _choice(_string(value), key)
+    if kind == "bool":
+        if not isinstance(value, bool):
+            raise _Bad(f"expected true or false (got {show(value)})")
+        return value
     # Vectors
     if kind == "vec2":
         return _vector(value, 2, key)

@@ -499,3 +499,47 @@ def test_an_unknown_material_model_stops_the_one_point_kernel():
                         reference(x, conn), HG_COEFFICIENT, 0, ne, np.zeros_like(x), np.zeros(ne),
                         np.zeros(ne), np.zeros((0, 3)))
     assert bad == 5
+
+
+@pytest.mark.parametrize("model", [ELASTIC, CAP])
+def test_two_by_two_skips_only_unloaded_elements_at_rest(model):
+    """With a rest counter the 2x2 kernel skips exactly the elements whose nodes did not move
+    and whose points carry no stress, and every output is the one computing them gives: a
+    moving element, its neighbours and a stressed element at rest are computed, the rest
+    counted."""
+    from pdfem.kernels.cap import cap_initial_state
+    from pdfem.kernels.params import CAP_A, CAP_D, CAP_KAPPA0, CAP_R, CAP_T, CAP_TOL, CAP_W
+
+    mat = material(model)
+    if model == CAP:
+        mat[0, [CAP_A, CAP_D, CAP_R, CAP_W, CAP_KAPPA0, CAP_T, CAP_TOL]] = [
+            1.5e8, 5e-10, 2.0, 0.01, -3e9, 3e8, 0.0]
+    xref, conn = grid(4, 3, 0.15, seed=4)
+    ne, nn = conn.shape[0], xref.shape[0]
+    du = np.zeros_like(xref)
+    # Element 0's nodes move; element 10 is at rest but stressed; the others are untouched
+    du[conn[0]] = np.random.default_rng(2).uniform(-2e-3, 2e-3, size=(4, 2))
+    runs = []
+    for rest in (None, np.zeros(1, np.int64)):
+        st = State(nn, ne, 4)
+        st.sig[10, :, 1] = -2.0e7
+        if model == CAP:
+            st.mstate = np.zeros((ne, 4, 6))
+            for e in range(ne):
+                for q in range(4):
+                    cap_initial_state(mat[0], st.mstate[e, q])
+        st.f[:] = 0.0
+        bad = q4_forces_2x2(xref + du, du, conn, np.zeros(ne, np.int32), mat, st.sig,
+                            st.mstate, st.hg, 0, 0, ne, st.f, st.ewint, st.ewp,
+                            np.zeros((0, 3)), rest)
+        assert bad == -1
+        runs.append((st, rest))
+    (a, _), (b, rest) = runs
+    # Skipped: the elements with no node of element 0 (it moves them), but element 10
+    moving = np.isin(conn, conn[0]).any(axis=1)
+    assert moving.sum() == 4 and not moving[10]
+    assert rest[0] == ne - 5
+    for name in ("sig", "mstate", "f", "ewint", "ewp"):
+        assert np.array_equal(getattr(a, name), getattr(b, name)), name
+    # The computed ones did work: the moving element's stress and the stressed one's forces
+    assert np.abs(b.sig[0]).max() > 0.0 and np.abs(b.f[conn[10]]).max() > 0.0

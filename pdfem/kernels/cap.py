@@ -31,7 +31,8 @@ step at I1 = 0 between the cap top -X/R and the envelope F(0), i.e. a non-convex
 domain. The trial I1 picks the side (cap_side); the corner there is (0, F(0)).
 
 Accuracy: the increment is split into 1 + int(overshoot/SUB_ETA) equal substeps (overshoot =
-normalised yield value of the trial, at most NSUB_MAX), so results hardly depend on the
+normalised yield value of the trial, in units of A, taken against the larger of A and the
+trial's mean stress |I1|/3: cap_substeps; at most NSUB_MAX), so results hardly depend on the
 increment size: one increment vs ten differ by < 0.5 % of max(A, |sigma|) in the tests
 (kappa <= 0), by up to 4 % for paths crossing the kappa > 0 step.
 
@@ -207,10 +208,23 @@ def _step(p, sig, st, d0, d1, d2, d3, xa, tn):
 
 
 @njit(cache=True)
+def cap_substeps(p, sig, d0, d1, d3, over):
+    """Substeps of a plastic increment from stress sig (4,) with normalised overshoot over (the
+    trial's yield value, a multiple of A): 1 + int(rel / SUB_ETA), at most NSUB_MAX, with rel the
+    overshoot against the larger of A and the trial's mean stress |I1_t| / 3. The accuracy is
+    relative to max(A, |sigma|); a cap crushed to tens of GPa moves by many A in one increment,
+    and counted in A alone would take the cap's walk in thousands of substeps."""
+    a = p[CAP_A]
+    i1t = sig[0] + sig[1] + sig[3] + 3.0 * p[BULK] * (d0 + d1 + d3)
+    rel = over * (a / max(a, abs(i1t) / 3.0))
+    return min(NSUB_MAX, 1 + int(rel / SUB_ETA))
+
+
+@njit(cache=True)
 def _plastic_update(p, sig, st, d0, d1, d2, d3, over):
     """Substepped plastic update of cap_update for a trial with normalised overshoot over."""
-    # Substeps: more of them the further the trial lies outside
-    nsub = min(NSUB_MAX, 1 + int(over / SUB_ETA))
+    # Substeps: more of them the further the trial lies outside, against the stress's size
+    nsub = cap_substeps(p, sig, d0, d1, d3, over)
     xa = x0(p)
     tn = tension_limit(p)
     w = 1.0 / nsub

@@ -364,8 +364,12 @@ static int step(const double *p, double *sig, double *st, double d0, double d1, 
 /* Substepped plastic update for a trial with normalised overshoot over; returns status */
 static int plastic_update(const double *p, double *sig, double *st, double d0, double d1,
                           double d2, double d3, double over, double *dwp) {
-    /* Substeps: more of them the further the trial lies outside */
-    int64_t ns = 1 + trunc_i64(over / SUB_ETA);
+    /* Substeps: more of them the further the trial lies outside, against the stress's size
+       (the larger of A and the trial's mean stress |I1|/3) */
+    double a = p[CAP_A];
+    double i1t = sig[0] + sig[1] + sig[3] + 3.0 * p[BULK] * (d0 + d1 + d3);
+    double scale = fabs(i1t) / 3.0 > a ? fabs(i1t) / 3.0 : a;
+    int64_t ns = 1 + trunc_i64(over * (a / scale) / SUB_ETA);
     int64_t nsub = ns < NSUB_MAX ? ns : NSUB_MAX;
     double xa = x0(p);
     double tn = tension_limit(p);

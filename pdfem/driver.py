@@ -98,7 +98,7 @@ def _run(sim, out_path, quiet, log):
 def _skipped(sim, comm):
     """Share of the 2x2 element updates of the run skipped at rest, over all ranks (None with
     the 1-point rule, which computes every element, or with element.skip_rest = false)."""
-    if sim.nip == 1 or sim.rest is None:
+    if sim.rest is None:
         return None
     n = global_sum(comm, sim.element_steps)
     return global_sum(comm, int(sim.rest.sum())) / n if n > 0 else 0.0

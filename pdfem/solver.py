@@ -78,9 +78,10 @@ class Simulation:
         el = r["element"]
         self.nip = 1 if el["rule"] == "1pt" else 4
         self.element_kernel = q4_forces_1pt if el["rule"] == "1pt" else q4_forces_2x2
-        # The 2x2 rule's count of elements skipped at rest (None: element.skip_rest = false), and
-        # of the element updates it was asked for
-        self.rest = np.zeros(1, np.int64) if el["skip_rest"] else None
+        # The 2x2 rule's count of elements skipped at rest, and of the element updates it was
+        # asked for (None: the 1-point rule, or element.skip_rest = false: nothing is skipped)
+        self.rest = (np.zeros(1, np.int64) if el["skip_rest"] and el["rule"] == "2x2"
+                     else None)
         self.element_steps = 0
         # The 1-point rule's hourglass spring: its modulus and coefficient
         kind = el["hourglass_stiffness"]
@@ -313,7 +314,7 @@ class Simulation:
             args = (s.x, self.du, s.conn, s.emat, self.mat_params, s.sig, s.mst, s.hourglass,
                     self.hg_model, 0, s.ne_own, self.f, s.ewint, s.ewp,
                     s.eth if self.coupled else self.no_eth)
-            if self.nip == 1:
+            if self.rest is None:
                 bad = self.element_kernel(*args)
             else:
                 # Elements at rest and unloaded are skipped from the first step on (every

@@ -8,19 +8,21 @@ from pdfem.tools.study.pareto import add_errors, mark_pareto, recommend, recomme
 KEYS = ("us", "arrival", "hammer_stress", "packing")
 
 
-def test_plan_reference_grid_and_axes():
-    ref = acc.reference_setting([1, 2, 3], ["1pt", "2x2"], [0.9, 0.5, 0.25])
-    assert ref.key == (3, "2x2", 0.25, 1.0) and ref.label == "L3-2x2-s0.25-k1"
-    assert ref.quads == 54
+def test_plan_grid_and_axes():
     grid = acc.grid_settings([1, 2], ["1pt", "2x2"], 0.5)
     assert [s.label for s in grid] == ["L1-1pt-s0.5-k1", "L1-2x2-s0.5-k1", "L2-1pt-s0.5-k1",
                                        "L2-2x2-s0.5-k1"]
     axes = acc.axis_settings(grid[2], [0.25, 0.5, 0.9], [0.1, 1.0, 10.0])
     assert [(s.axis, s.safety, s.kn0_scale) for s in axes] == [
         ("safety", 0.25, 1.0), ("safety", 0.9, 1.0), ("kn0", 0.5, 0.1), ("kn0", 0.5, 10.0)]
-    # A grid point equal to the reference runs once, as the reference
-    again = acc.unique([acc.Setting(2, "2x2", 0.5, 1.0, "reference")] + grid)
-    assert len(again) == 4 and again[0].axis == "reference"
+    assert grid[3].quads == 24
+    # A setting twice runs once, with its first reason
+    again = acc.unique(grid + [acc.Setting(2, "2x2", 0.5, 1.0, "safety")])
+    assert len(again) == 4 and again[3].axis == "grid"
+    # Every setting a study may run: the grid, then the axes around each grid point
+    every = acc.possible_settings([1, 2], ["2x2"], [0.5, 0.9], [1.0, 10.0], 0.5)
+    assert [s.label for s in every] == ["L1-2x2-s0.5-k1", "L2-2x2-s0.5-k1", "L1-2x2-s0.9-k1",
+                                        "L1-2x2-s0.5-k10", "L2-2x2-s0.9-k1", "L2-2x2-s0.5-k10"]
 
 
 def test_scale_contact_scales_every_given_stiffness():
@@ -41,27 +43,34 @@ def _row(label, wall, vals, axis="grid"):
 
 
 def test_errors_pareto_and_the_choice():
-    ref = _row("L3-2x2-s0.25-k1", 100.0, (1000.0, 1e-6, 3e8, 0.99), "reference")
-    rows = [ref,
+    ref = dict(zip(KEYS, (1000.0, 1e-6, 3e8, 0.99), strict=True))
+    rows = [_row("L3-2x2-s0.5-k1", 100.0, (1000.0, 1e-6, 3e8, 0.99)),  # exact, dearest
             _row("L1-1pt-s0.5-k1", 1.0, (600.0, 1e-6, 3e8, 0.99)),     # 40 % off, cheapest
             _row("L1-2x2-s0.5-k1", 2.0, (1030.0, 1e-6, 3e8, 0.99)),    # 3 %
             _row("L2-1pt-s0.5-k1", 3.0, (1040.0, 1e-6, 3e8, 0.99)),    # 4 %, dearer: off front
             _row("L2-2x2-s0.5-k1", 5.0, (1000.0, 1e-6, 2.97e8, 0.99)),  # 1 %
             _row("L2-2x2-s0.5-k10", 9.0, (math.nan, 1e-6, 3e8, 0.99))]  # no Us: never chosen
     add_errors(rows, ref)
-    assert ref["err_max"] == 0.0 and all(ref["err_" + k] == 0.0 for k in KEYS)
+    assert rows[0]["err_max"] == 0.0 and all(rows[0]["err_" + k] == 0.0 for k in KEYS)
     assert rows[2]["err_us"] == 0.03 and math.isinf(rows[5]["err_max"])
     mark_pareto(rows)
     assert [r["setting"].label for r in rows if r["pareto"]] == [
-        "L3-2x2-s0.25-k1", "L1-1pt-s0.5-k1", "L1-2x2-s0.5-k1", "L2-2x2-s0.5-k1"]
+        "L3-2x2-s0.5-k1", "L1-1pt-s0.5-k1", "L1-2x2-s0.5-k1", "L2-2x2-s0.5-k1"]
     assert recommend(rows, 0.05)["setting"].label == "L1-2x2-s0.5-k1"
     assert recommend(rows, 0.02)["setting"].label == "L2-2x2-s0.5-k1"
-    assert recommend(rows, 0.001) is None
-    assert "choose level 1 (6 quads per grain), rule 2x2" in recommendation_line(rows, 0.05)
-    assert "no cheaper run" in recommendation_line(rows, 0.001)
-    # The baseline of the axes: the cheapest grid run within the tolerance
+    assert recommend(rows, 0.001)["setting"].label == "L3-2x2-s0.5-k1"
+    line = recommendation_line(rows, 0.05)
+    assert "choose level 1 (6 quads per grain), rule 2x2" in line
+    assert "50 x faster than the dearest run of the study (L3-2x2-s0.5-k1, 100.0 s)" in line
+    # The baseline of the axes: the cheapest grid run within the tolerance, else the closest
     assert acc.baseline(rows, 0.05).label == "L1-2x2-s0.5-k1"
-    assert acc.baseline(rows, 0.001).label == "L2-2x2-s0.5-k1"
+    assert acc.baseline(rows, 0.001).label == "L3-2x2-s0.5-k1"
+    rows[0]["err_max"] = 0.002
+    assert recommend(rows, 0.001) is None
+    assert acc.baseline(rows, 0.001).label == "L3-2x2-s0.5-k1"
+    line = recommendation_line(rows, 0.001)
+    assert line.startswith("no run of the study has every error <= 0.1 %")
+    assert "the closest is level 3 (54 quads per grain), rule 2x2" in line
 
 
 def test_speed_rungs_hold_the_piston_until_the_slowest_front_has_crossed():

@@ -92,7 +92,7 @@ def _accuracy_args(p):
                    "grain; multiples of the bed file's level (default 1,2,3,4)")
     p.add_argument("--rules", default="1pt,2x2", help="element rules (default 1pt,2x2)")
     p.add_argument("--safety", default="0.9,0.5,0.25", help="time.safety factors; the grid "
-                   "runs at the scene's, the reference at the smallest (default 0.9,0.5,0.25)")
+                   "runs at the scene's, the others around the baseline (default 0.9,0.5,0.25)")
     p.add_argument("--kn0-scale", default="0.1,1,10", help="factors on the contact stiffness "
                    "(kn0, ks and the pairs'); 1 = the scene's (default 0.1,1,10)")
     p.add_argument("--baseline", default="auto", help="LEVEL,RULE around which the safety "
@@ -100,7 +100,8 @@ def _accuracy_args(p):
     p.add_argument("--tol", type=float, default=0.05, help="accuracy asked of the "
                    "recommended settings, relative (default 0.05)")
     p.add_argument("-p", "--prefix", default="study-accuracy", help="writes <prefix>.csv, "
-                   "<prefix>.png and the runs in <prefix>-runs/ (default study-accuracy)")
+                   "<prefix>.json (the converged estimate), <prefix>.png and the runs in "
+                   "<prefix>-runs/ (default study-accuracy)")
     p.add_argument("--force", action="store_true", help="overwrite existing output")
     p.add_argument("--no-convergence", action="store_true", help="skip the element "
                    "convergence order printed at the end")
@@ -123,11 +124,12 @@ def _scene_path(args):
     return args.scene or str(resources.files("pdfem") / "scenes" / DEFAULT_STUDY_SCENE)
 
 
-def _outputs(prefix, force):
-    """Check the CSV, PNG and runs folder of a prefix; return the folder's path."""
+def _outputs(prefix, force, exts=(".csv", ".png")):
+    """Check the output files (``exts``) and runs folder of a prefix; return the folder's
+    path."""
     from pdfem.cli.paths import check_output_path
 
-    for ext in (".csv", ".png"):
+    for ext in exts:
         check_output_path(prefix + ext, force, "--prefix")
     folder = prefix + "-runs"
     if os.path.exists(folder) and not os.path.isdir(folder):
@@ -164,7 +166,7 @@ def _accuracy(args):
         raise InputError(f"{path}: contact: --kn0-scale needs a scene with a [contact] table")
     with open(path, "rb") as fh:
         doc = tomllib.load(fh)
-    folder = _outputs(args.prefix, args.force)
+    folder = _outputs(args.prefix, args.force, (".csv", ".json", ".png"))
     study = acc.AccuracyStudy(doc, scene, folder, comm)
     study.check_levels(levels)
     if base_given and base_given[0] not in levels:
@@ -185,19 +187,36 @@ def _accuracy(args):
         from pdfem.tools.study.plots import accuracy_plot
 
         pareto.write_csv(rows, args.prefix + ".csv")
-        accuracy_plot(rows, args.tol, args.prefix + ".png")
+        _write_estimate(study.estimate, args.prefix + ".json", comm.size)
+        accuracy_plot(rows, args.tol, args.prefix + ".png", study.estimate)
         print("", *pareto.table_lines(rows), "", sep="\n")
-        print("errors in % against the reference; * = on the Pareto front of worst error "
-              "versus wall time")
-        print(pareto.reference_line(rows[0]))
+        print("errors in % against the converged estimate; * = on the Pareto front of worst "
+              "error versus wall time")
+        print("converged estimate (Richardson extrapolation of each rule's levels):")
+        print("\n".join("  " + line for line in pareto.estimate_lines(study.estimate)))
         print(pareto.recommendation_line(rows, args.tol,
                                          scene.resolved.get("contact", {}).get("kn0")))
-        print(f"pdfem study accuracy: {args.prefix}.csv, {args.prefix}.png, runs in "
+        print(f"pdfem study accuracy: {args.prefix}.csv, {args.prefix}.json, "
+              f"{args.prefix}.png, runs in "
               f"{folder}/; {sum(r['wall_s'] for r in rows):.0f} s of runs", flush=True)
     barrier(comm)
     if not args.no_convergence:
         _print_convergence(comm, CONVERGENCE_SIZES, rules)
     return 0
+
+
+def _write_estimate(estimate, path, ranks):
+    """The converged estimate and where it came from, as JSON (written atomically)."""
+    import json
+
+    from pdfem.tools.provenance import provenance
+    from pdfem.tools.study.pareto import estimate_table
+
+    tmp = path + ".part"
+    with open(tmp, "w") as fh:
+        json.dump({"provenance": provenance(ranks), "estimate": estimate_table(estimate)}, fh,
+                  indent=1, allow_nan=True)
+    os.replace(tmp, path)
 
 
 def _print_convergence(comm, sizes, rules):

@@ -23,22 +23,38 @@ def test_tiny_accuracy_study_on_2_ranks(tmp_path):
     assert p.returncode == 0, p.stderr
     rows = list(csv.DictReader((tmp_path / "acc.csv").open()))
     assert list(rows[0]) == COLUMNS
-    # The reference first (finest level, 2x2, smallest safety), exact against itself
-    ref = rows[0]
-    assert (ref["run"], ref["axis"], ref["status"]) == ("L2-2x2-s0.5-k1", "reference", "ok")
-    assert all(float(ref[c]) == 0.0 for c in COLUMNS if c.startswith("err_"))
-    assert ref["pareto"] == "1"
-    # The level x rule grid (the reference is its L2-2x2), then the safety 0.9 at the baseline
-    assert sorted(r["run"] for r in rows if r["axis"] == "grid") == [
-        "L1-1pt-s0.5-k1", "L1-2x2-s0.5-k1", "L2-1pt-s0.5-k1"]
+    # The level x rule grid at the scene's safety factor, then the safety 0.9 at the baseline
+    assert [(r["run"], r["axis"]) for r in rows[:4]] == [
+        ("L1-1pt-s0.5-k1", "grid"), ("L1-2x2-s0.5-k1", "grid"), ("L2-1pt-s0.5-k1", "grid"),
+        ("L2-2x2-s0.5-k1", "grid")]
     assert [r["axis"] for r in rows[4:]] == ["safety"] and rows[4]["safety"] == "0.9"
     for r in rows:
         assert float(r["wall_s"]) > 0 and r["status"] == "ok"
         assert (tmp_path / r["run_file"]).is_file()
+    # The converged estimate: each rule's two levels extrapolated at order 2, then combined;
+    # every error is against the combined value
+    body = json.loads((tmp_path / "acc.json").read_text())
+    assert body["provenance"]["ranks"] == 2
+    est = body["estimate"]["us"]
+    for rule, (coarse, fine) in (("1pt", rows[0:3:2]), ("2x2", rows[1:4:2])):
+        q1, q2 = float(coarse["us"]), float(fine["us"])
+        e = est["rules"][rule]
+        assert e["how"] == "two levels, order 2 assumed" and e["levels"] == [1, 2]
+        assert e["value"] == pytest.approx(q2 + (q2 - q1) / 3.0, rel=1e-5)
+    us = est["combined"]["value"]
+    assert min(e["value"] for e in est["rules"].values()) - 1e-6 <= us
+    assert us <= max(e["value"] for e in est["rules"].values()) + 1e-6
+    for r in rows:
+        assert float(r["err_us"]) == pytest.approx(abs(float(r["us"]) - us) / us, rel=1e-4,
+                                                   abs=1e-6)
+    assert "converged estimate (Richardson extrapolation of each rule's levels):" in p.stdout
+    assert re.search(r"front speed Us: \d+(\.\d+)? \+- [\d.e+]+ m/s", p.stdout)
     # Figure, table, recommendation, convergence orders
     assert (tmp_path / "acc.png").read_bytes()[:4] == b"\x89PNG"
     assert "| run | quads/grain | rule |" in p.stdout
-    assert "for a 5 % answer choose level" in p.stdout
+    within = [r for r in rows if float(r["err_max"]) <= 0.05]
+    assert ("for a 5 % answer choose level" in p.stdout) == bool(within)
+    assert ("no run of the study has every error <= 5 %" in p.stdout) == (not within)
     assert re.search(r"observed order in h \(finest pair\): 1pt \d\.\d\d, 2x2 \d\.\d\d",
                      p.stdout)
     # No overwriting without --force

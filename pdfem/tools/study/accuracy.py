@@ -1,13 +1,15 @@
-"""Accuracy-cost study of a shock scene: one run per setting, measured against the finest.
+"""Accuracy-cost study of a shock scene: one run per setting, measured against the converged
+estimate of its ladder of meshes.
 
 A setting is a grain mesh level (6 level^2 quads per grain), an element rule (1-point with
 hourglass control, or 2x2), a time-step safety factor and a factor on the contact stiffness.
 A full Cartesian grid of the four is too slow, so the study runs
 
-1. the reference: the highest level, the 2x2 rule (when studied), the smallest safety factor
-   and the scene's own contact stiffness;
-2. the grid of every level x every rule at the scene's safety factor and stiffness;
-3. one axis at a time around a baseline (level, rule): every other safety factor, then every
+1. the grid of every level x every rule at the scene's safety factor and stiffness; from its
+   ladders, the converged estimate of each quantity with its uncertainty
+   (:mod:`pdfem.tools.study.estimate`: Richardson extrapolation with the observed order,
+   each rule, then the rules combined), against which every run's error is measured;
+2. one axis at a time around a baseline (level, rule): every other safety factor, then every
    other stiffness factor. The baseline is given, or by default the cheapest grid run whose
    every error is within the tolerance (failing that, the grid run with the smallest worst
    error): the settings a user would pick are probed where they matter.
@@ -34,7 +36,8 @@ import numpy as np
 from pdfem.errors import InputError, SimulationError
 from pdfem.parallel.mpi import barrier, broadcast, global_max
 from pdfem.tools.study import pareto
-from pdfem.tools.study.quantities import QUANTITIES, measure
+from pdfem.tools.study.estimate import converged
+from pdfem.tools.study.quantities import MEASURED, QUANTITIES, SE_KEYS, measure
 
 RULES = ("1pt", "2x2")
 
@@ -43,8 +46,8 @@ RULES = ("1pt", "2x2")
 class Setting:
     """One point of the study: mesh level, element rule, safety factor, stiffness factor.
 
-    ``axis`` says why it runs: ``reference``, ``grid`` (level x rule), ``safety`` or ``kn0``
-    (one axis varied around the baseline).
+    ``axis`` says why it runs: ``grid`` (level x rule), ``safety`` or ``kn0`` (one axis
+    varied around the baseline).
     """
 
     level: int
@@ -69,12 +72,6 @@ class Setting:
         return 6 * self.level * self.level
 
 
-def reference_setting(levels, rules, safeties):
-    """The finest setting: highest level, 2x2 if studied, smallest safety, kn0 x 1."""
-    rule = "2x2" if "2x2" in rules else rules[-1]
-    return Setting(max(levels), rule, min(safeties), 1.0, "reference")
-
-
 def grid_settings(levels, rules, safety):
     """Every level x every rule at one safety factor and the scene's stiffness."""
     return [Setting(lv, r, safety, 1.0, "grid") for lv in levels for r in rules]
@@ -90,12 +87,12 @@ def axis_settings(base, safeties, kn0_scales):
 
 
 def possible_settings(levels, rules, safeties, kn0_scales, safety, base=None):
-    """Every setting a study may run: the reference, the grid at ``safety`` (the scene's)
-    and the axes around the baseline ``base`` (level, rule) or, when it is chosen from the
-    grid's results, around every grid setting."""
+    """Every setting a study may run: the grid at ``safety`` (the scene's) and the axes
+    around the baseline ``base`` (level, rule) or, when it is chosen from the grid's
+    results, around every grid setting."""
     grid = grid_settings(levels, rules, safety)
     bases = [Setting(base[0], base[1], safety, 1.0)] if base else grid
-    out = [reference_setting(levels, rules, list(safeties) + [safety])] + grid
+    out = list(grid)
     for b in bases:
         out += axis_settings(b, safeties, kn0_scales)
     return unique(out)
@@ -151,6 +148,8 @@ class AccuracyStudy:
             with h5py.File(self.bed, "r") as f:
                 self.bed_nip = f["grains/stress"].shape[2] if "grains/stress" in f else None
         self.rows = []
+        # The converged estimate of each quantity (pdfem.tools.study.estimate.converged)
+        self.estimate = None
 
     def check_levels(self, levels):
         """Every level must be a multiple of the bed file's (InputError otherwise)."""
@@ -233,7 +232,7 @@ class AccuracyStudy:
         wall = global_max(self.comm, time.perf_counter() - t0)
         vals = None
         if self.comm.rank == 0:
-            vals = ({k: math.nan for k, *_ in QUANTITIES} if status != "ok"
+            vals = ({k: math.nan for k in MEASURED} if status != "ok"
                     else measure(out, os.path.splitext(out)[0]))
         vals = broadcast(self.comm, vals)
         row = {"setting": setting, "wall_s": wall, "steps": steps, "status": status,
@@ -243,26 +242,30 @@ class AccuracyStudy:
 
     def run_all(self, levels, rules, safeties, kn0_scales, tol, base=None):
         """Run the study (module docstring) and return its rows with their errors against
-        the reference and their Pareto flags.
+        the converged estimate (kept in ``self.estimate``) and their Pareto flags.
 
         ``safeties`` and ``kn0_scales`` are the values of the two axes (the grid runs at the
         scene's safety factor and stiffness); ``base`` an optional (level, rule) baseline,
         otherwise chosen with ``tol`` by :func:`baseline`. Raises
-        :class:`~pdfem.errors.SimulationError` when the reference run fails.
+        :class:`~pdfem.errors.SimulationError` when no quantity has an estimate (every
+        ladder of the grid has fewer than two runs that ended).
         """
         safety = self.scene.resolved["time"]["safety"]
-        ref = reference_setting(levels, rules, list(safeties) + [safety])
-        plan = unique([ref] + grid_settings(levels, rules, safety))
+        plan = grid_settings(levels, rules, safety)
         self.log(f"pdfem study accuracy: {self.scene.path} on {self.comm.size} rank(s): the "
-                 f"reference {ref.label} and the level x rule grid ({len(plan)} runs), then "
+                 f"level x rule grid ({len(plan)} runs) and its converged estimate, then "
                  "the safety factors and contact stiffnesses around a baseline", flush=True)
-        # The reference first, then the level x rule grid
+        # The level x rule grid and the estimate from its ladders
         for k, setting in enumerate(plan):
             self._logged(setting, f"{k + 1}/{len(plan)}")
-        refrow = self.rows[0]
-        if refrow["status"] != "ok":
-            raise SimulationError(f"the reference run {ref.label} {refrow['status']}")
-        pareto.add_errors(self.rows, refrow)
+        keys = [k for k, *_ in QUANTITIES]
+        self.estimate = converged(self.rows, keys, SE_KEYS)
+        if all(self.estimate[k]["combined"] is None for k in keys):
+            raise SimulationError("no converged estimate: every ladder of the level x rule "
+                                  "grid has fewer than two runs that reached the end")
+        values = {k: (e["combined"] or {}).get("value", math.nan)
+                  for k, e in self.estimate.items()}
+        pareto.add_errors(self.rows, values)
         # One axis at a time around the baseline
         base = (Setting(base[0], base[1], safety, 1.0) if base else baseline(self.rows, tol))
         done = {r["setting"].key for r in self.rows}
@@ -273,7 +276,7 @@ class AccuracyStudy:
                      "the contact stiffness", flush=True)
         for k, setting in enumerate(axes):
             self._logged(setting, f"axis {k + 1}/{len(axes)}")
-        pareto.add_errors(self.rows, refrow)
+        pareto.add_errors(self.rows, values)
         pareto.mark_pareto(self.rows)
         return self.rows
 

@@ -1,5 +1,5 @@
-"""Errors against the reference run, the Pareto front of error versus wall time, the choice
-for a given tolerance, and the study's CSV file and table.
+"""Errors against the converged estimate, the Pareto front of error versus wall time, the
+choice for a given tolerance, and the study's CSV file, table and estimate in words.
 
 A row is a dict made by :class:`pdfem.tools.study.accuracy.AccuracyStudy` (its ``setting``, wall
 time, steps, status and the measured :data:`~pdfem.tools.study.quantities.QUANTITIES`).
@@ -13,8 +13,9 @@ from pdfem.tools.study.quantities import QUANTITIES
 
 
 def add_errors(rows, ref):
-    """Add ``err_<q>`` (relative error |q - q_ref| / |q_ref|; NaN when either is missing) and
-    ``err_max`` (the worst; +inf when any is missing) to every row, in place."""
+    """Add ``err_<q>`` (relative error |q - q_ref| / |q_ref| against ``ref``, a mapping of the
+    quantities' keys to their reference values; NaN when either is missing) and ``err_max``
+    (the worst; +inf when any is missing) to every row, in place."""
     for row in rows:
         worst = 0.0
         for key, *_ in QUANTITIES:
@@ -27,7 +28,7 @@ def add_errors(rows, ref):
 
 def mark_pareto(rows):
     """Set ``pareto`` on every row: True when no run at most as long has a smaller or equal
-    worst error (the reference, exact by definition, is on the front)."""
+    worst error."""
     done = sorted((r for r in rows if math.isfinite(r["err_max"])),
                   key=lambda r: (r["wall_s"], r["err_max"]))
     best = math.inf
@@ -39,9 +40,8 @@ def mark_pareto(rows):
 
 
 def recommend(rows, tol):
-    """The cheapest run other than the reference whose every error is <= ``tol``; None if
-    no such run."""
-    ok = [r for r in rows if r["setting"].axis != "reference" and r["err_max"] <= tol]
+    """The cheapest run whose every error is <= ``tol``; None if no such run."""
+    ok = [r for r in rows if r["err_max"] <= tol]
     return min(ok, key=lambda r: r["wall_s"]) if ok else None
 
 
@@ -60,17 +60,21 @@ def worst_name(row):
 
 def recommendation_line(rows, tol, kn0=None):
     """The sentence printed at the end of the study."""
-    ref = next(r for r in rows if r["setting"].axis == "reference")
     pick = recommend(rows, tol)
     pct = f"{tol * 100:g} %"
+    done = [r for r in rows if math.isfinite(r["err_max"])]
     if pick is None:
-        return (f"for a {pct} answer choose {describe(ref['setting'], kn0)}: no cheaper run "
-                f"of the study has every error <= {pct} (the reference took "
-                f"{ref['wall_s']:.1f} s)")
+        best = min(done, key=lambda r: r["err_max"]) if done else None
+        return (f"no run of the study has every error <= {pct} against the converged "
+                "estimate" + (f"; the closest is {describe(best['setting'], kn0)} "
+                              f"(largest {best['err_max'] * 100:.1f} %, {worst_name(best)}, "
+                              f"{best['wall_s']:.1f} s)" if best else ""))
+    dearest = max(done, key=lambda r: r["wall_s"])
     return (f"for a {pct} answer choose {describe(pick['setting'], kn0)}: every error <= "
-            f"{pct} (largest {pick['err_max'] * 100:.1f} %, {worst_name(pick)}) in "
-            f"{pick['wall_s']:.1f} s, {ref['wall_s'] / pick['wall_s']:.0f} x faster than the "
-            f"reference ({ref['wall_s']:.1f} s)")
+            f"{pct} against the converged estimate (largest {pick['err_max'] * 100:.1f} %, "
+            f"{worst_name(pick)}) in {pick['wall_s']:.1f} s, "
+            f"{dearest['wall_s'] / pick['wall_s']:.0f} x faster than the dearest run of the "
+            f"study ({dearest['setting'].label}, {dearest['wall_s']:.1f} s)")
 
 
 def _finite(v):
@@ -116,10 +120,7 @@ def table_lines(rows):
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in rows:
         s = r["setting"]
-        if s.axis == "reference":
-            errs = ["ref"] * (len(QUANTITIES) + 1)
-        else:
-            errs = [_pct(r["err_" + k]) for k, *_ in QUANTITIES] + [_pct(r["err_max"])]
+        errs = [_pct(r["err_" + k]) for k, *_ in QUANTITIES] + [_pct(r["err_max"])]
         cells = [s.label, str(s.quads), s.rule, f"{s.safety:g}", f"{s.kn0_scale:g}",
                  f"{r['wall_s']:.1f}", str(r["steps"]) if r["status"] == "ok" else "failed"]
         lines.append("| " + " | ".join(cells + errs + ["*" if r["pareto"] else ""]) + " |")
@@ -131,8 +132,33 @@ def _pct(e):
     return f"{e * 100:.1f}" if math.isfinite(e) else "n/a"
 
 
-def reference_line(ref):
-    """The reference run's values in words."""
-    vals = ", ".join(f"{w} {ref[k] * s:.4g}{' ' + u if u else ''}"
-                     for k, _, w, u, s in QUANTITIES)
-    return f"reference {ref['setting'].label} ({ref['wall_s']:.1f} s): {vals}"
+def estimate_lines(estimate):
+    """The converged estimate in words, one line per quantity: the combined value and its
+    uncertainty, then each rule's extrapolation (pdfem.tools.study.estimate)."""
+    lines = []
+    for key, _, words, unit, scale in QUANTITIES:
+        e = estimate.get(key) or {}
+        c = e.get("combined")
+        u = f" {unit}" if unit else ""
+        if c is None:
+            lines.append(f"{words}: no estimate (fewer than two levels ran for every rule)")
+            continue
+        rel = abs(c["uncertainty"] / c["value"]) * 100 if c["value"] else math.inf
+        parts = []
+        for rule, r in e["rules"].items():
+            if r is not None:
+                lv = "-".join(map(str, r["levels"]))
+                parts.append(f"{rule} levels {lv}: {r['value'] * scale:.4g} +- "
+                             f"{r['uncertainty'] * scale:.2g} ({r['how']})")
+        flag = "" if c["agree"] else "; the rules disagree beyond their bands"
+        lines.append(f"{words}: {c['value'] * scale:.4g} +- {c['uncertainty'] * scale:.2g}{u} "
+                     f"({rel:.1f} %{flag}); " + "; ".join(parts))
+    return lines
+
+
+def estimate_table(estimate):
+    """The estimate as plain data for the study's JSON: per quantity, the combined value,
+    uncertainty and agreement, and each rule's ladder estimate (SI units)."""
+    return {key: {"combined": (estimate.get(key) or {}).get("combined"),
+                  "rules": (estimate.get(key) or {}).get("rules", {})}
+            for key, *_ in QUANTITIES}

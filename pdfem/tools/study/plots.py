@@ -34,18 +34,18 @@ def _plain_ticks(ax):
         axis.set_minor_formatter(fmt)
 
 
-def accuracy_plot(rows, tol, path):
+def accuracy_plot(rows, tol, path, estimate=None):
     """Left: each run's worst relative error against its wall time, the Pareto front and the
     tolerance; right: each quantity's error against quads per grain for the level x rule
-    grid (and the reference's level)."""
+    grid, errors against the converged estimate, and (dotted, with ``estimate``: the
+    pdfem.tools.study.estimate.converged dict) each estimate's own relative band."""
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12.5, 5.0))
     fig.subplots_adjust(wspace=0.3)
-    ref = next(r for r in rows if r["setting"].axis == "reference")
     # Worst error against wall time, one marker per run
     shown = set()
     for r in rows:
         s = r["setting"]
-        if s.axis == "reference" or not math.isfinite(r["err_max"]):
+        if not math.isfinite(r["err_max"]):
             continue
         name = {"grid": f"level x rule ({s.rule})", "safety": f"safety factor ({s.rule})",
                 "kn0": f"contact stiffness ({s.rule})"}[s.axis]
@@ -57,17 +57,14 @@ def accuracy_plot(rows, tol, path):
             + (f" k{s.kn0_scale:g}" if s.axis == "kn0" else "")
         a1.annotate(tag, (r["wall_s"], _err(r["err_max"])), fontsize=7,
                     xytext=(4, 3), textcoords="offset points")
-    # The Pareto front of the runs other than the reference, the tolerance, the reference
-    front = sorted((r for r in rows if r["pareto"] and r["setting"].axis != "reference"),
-                   key=lambda r: r["wall_s"])
+    # The Pareto front and the tolerance
+    front = sorted((r for r in rows if r["pareto"]), key=lambda r: r["wall_s"])
     if front:
         a1.step([r["wall_s"] for r in front], [_err(r["err_max"]) for r in front], "k-",
                 where="post", lw=1.0, alpha=0.6, label="Pareto front")
     a1.axhline(tol, color="C3", ls="--", lw=1.0, label=f"{tol * 100:g} % tolerance")
-    a1.axvline(ref["wall_s"], color="0.5", ls=":", lw=1.0,
-               label=f"reference {ref['setting'].label}")
     a1.set_xlabel("wall time [s]")
-    a1.set_ylabel("worst relative error of the quantities")
+    a1.set_ylabel("worst relative error against the converged estimate")
     _plain_ticks(a1)
     failed = [r["setting"].label for r in rows if r["status"] != "ok"]
     a1.set_title("error against cost" + (f"; failed: {', '.join(failed)}" if failed else ""),
@@ -84,11 +81,17 @@ def accuracy_plot(rows, tol, path):
                           mfc="none" if rule == "1pt" else f"C{q}",
                           label=f"{head} ({rule})")
     a2.axhline(tol, color="C3", ls="--", lw=1.0)
+    # Each estimate's band relative to its value: errors below it are not resolved
+    for q, (key, *_) in enumerate(QUANTITIES):
+        c = ((estimate or {}).get(key) or {}).get("combined")
+        if c and c["value"] and c["uncertainty"] > 0.0:
+            a2.axhline(_err(abs(c["uncertainty"] / c["value"])), color=f"C{q}", ls=":",
+                       lw=1.0)
     a2.set_xlabel("quads per grain")
-    a2.set_ylabel("relative error against the reference")
+    a2.set_ylabel("relative error against the converged estimate")
     _plain_ticks(a2)
-    a2.set_title(f"level x rule grid, safety {grid[0]['setting'].safety:g}" if grid else "",
-                 fontsize=9)
+    a2.set_title((f"level x rule grid, safety {grid[0]['setting'].safety:g}" if grid else "")
+                 + ("; dotted: the estimate's band" if estimate else ""), fontsize=9)
     a2.grid(alpha=0.3)
     a2.legend(fontsize=7, ncol=2)
     _save(fig, path, (a1,))

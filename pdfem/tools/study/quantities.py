@@ -22,6 +22,10 @@ QUANTITIES = (
     ("hammer_stress", "hammer stress", "stress on the hammer face", "MPa", 1e-6),
     ("packing", "packing", "final packing fraction", "", 1.0),
 )
+# The statistical error of a quantity, where the analysis gives one: its row key
+SE_KEYS = {"us": "us_se"}
+# Everything a run's row holds from the analysis: the quantities and their errors
+MEASURED = tuple(k for k, *_ in QUANTITIES) + tuple(SE_KEYS.values())
 
 
 def final_packing(run):
@@ -45,8 +49,9 @@ def impact_peak(run, until):
 
 
 def measure(run_path, prefix):
-    """The :data:`QUANTITIES` of a finished shock run (NaN where the analysis finds none);
-    writes ``<prefix>-summary.json`` and ``.txt`` beside it."""
+    """The :data:`MEASURED` values of a finished shock run (NaN where the analysis finds none):
+    the :data:`QUANTITIES` and the front speed's standard error; writes
+    ``<prefix>-summary.json`` and ``.txt`` beside it."""
     from pdfem.tools.analysis import analyse
     from pdfem.tools.analysis.runfile import read_run
 
@@ -57,5 +62,5 @@ def measure(run_path, prefix):
     driven = s["shocked"]["sigma_source"] == "piston force"
     stress = s["shocked"]["sigma"] if driven else impact_peak(run, arrival)
     vals = {"us": s["front"]["us"], "arrival": arrival, "hammer_stress": stress,
-            "packing": final_packing(run)}
+            "packing": final_packing(run), "us_se": s["front"]["se"]}
     return {k: math.nan if v is None else float(v) for k, v in vals.items()}

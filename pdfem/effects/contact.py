@@ -261,7 +261,8 @@ class Contact(Effect):
                                fnod[sel].reshape(-1, 2 * NNOD), qsel], axis=1)
         # Columns: keys 0:4, nodes 4:12 (the grain side's cleared), weights, forces, heat
         rows[:, 4:4 + NNOD // 2] = -1
-        got = allgather_rows(ctx.comm, rows) if ctx.comm.size > 1 else rows
+        with ctx.timers.phase("contact_exchange"):
+            got = allgather_rows(ctx.comm, rows) if ctx.comm.size > 1 else rows
         if got.shape[0] == 0:
             self._add(st, ctx, order, active, local_nodes, weights, fnod, q, elems)
             return

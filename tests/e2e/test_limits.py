@@ -63,7 +63,7 @@ REFUSED = {
         "shot912_small.toml (piston at 1e-06 m/s): --velocities: about 1.57e+12 steps"),
     "study accuracy at safety 1e-9": (
         ["study", "accuracy", "--levels", "1,2", "--safety", "1e-9,0.5", "-p", "acc"],
-        "shot912_small.toml (L2-2x2-s1e-09-k1): time.end: about 3.38e+12 steps"),
+        "shot912_small.toml (L1-1pt-s1e-09-k1): time.end: about 1.88e+12 steps"),
     "study accuracy, an axis run at 1e12 x kn0": (
         ["study", "accuracy", "--levels", "1", "--rules", "1pt", "--safety", "0.5",
          "--kn0-scale", "1,1e12", "-p", "acc"],

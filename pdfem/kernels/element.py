@@ -29,24 +29,6 @@ XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
 ETA = np.array([-1.0, -1.0, 1.0, 1.0])
 
 
-def _shape_derivatives():
-    """dN_i/dxi and dN_i/deta (4 points x 4 nodes) at the 2x2 points, by _ip_grad's
-    arithmetic."""
-    dxi = np.empty((4, 4))
-    deta = np.empty((4, 4))
-    for ip in range(4):
-        xi = GP * XI[ip]
-        eta = GP * ETA[ip]
-        for i in range(4):
-            dxi[ip, i] = 0.25 * XI[i] * (1.0 + ETA[i] * eta)
-            deta[ip, i] = 0.25 * ETA[i] * (1.0 + XI[i] * xi)
-    return dxi, deta
-
-
-# The 2x2 points' shape derivatives, constants of the compiled kernels
-DXI, DETA = _shape_derivatives()
-
-
 @njit(cache=True)
 def _gather(x, du, conn, e, xc, xm, ue):
     """Current coordinates xc, mid-step coordinates xm and increments ue of element e."""
@@ -77,50 +59,31 @@ def _bvec(xe, bx, by):
 
 
 @njit(cache=True)
-def _map_grad(xe, dx, dy):
-    """Shape function gradients through the isoparametric map of quad xe: on entry dx, dy
-    (4,) hold dN/dxi, dN/deta at a point, on return dN/dx, dN/dy there; returns det J
-    (dx, dy left unfinished if <= 0)."""
+def _ip_grad(xe, xi, eta, dx, dy):
+    """Shape function gradients dx, dy (4,) at (xi, eta); returns det J (dx, dy unset if <= 0)."""
     # Jacobian of the isoparametric map
     j11 = 0.0
     j12 = 0.0
     j21 = 0.0
     j22 = 0.0
     for i in range(4):
-        j11 += dx[i] * xe[i, 0]
-        j12 += dy[i] * xe[i, 0]
-        j21 += dx[i] * xe[i, 1]
-        j22 += dy[i] * xe[i, 1]
+        dxi = 0.25 * XI[i] * (1.0 + ETA[i] * eta)
+        deta = 0.25 * ETA[i] * (1.0 + XI[i] * xi)
+        j11 += dxi * xe[i, 0]
+        j12 += deta * xe[i, 0]
+        j21 += dxi * xe[i, 1]
+        j22 += deta * xe[i, 1]
     det = j11 * j22 - j12 * j21
     if det <= 0.0:
         return det
     # Chain rule through the inverse Jacobian
     r = 1.0 / det
     for i in range(4):
-        dxi = dx[i]
-        deta = dy[i]
+        dxi = 0.25 * XI[i] * (1.0 + ETA[i] * eta)
+        deta = 0.25 * ETA[i] * (1.0 + XI[i] * xi)
         dx[i] = (j22 * dxi - j21 * deta) * r
         dy[i] = (j11 * deta - j12 * dxi) * r
     return det
-
-
-@njit(cache=True)
-def _ip_grad(xe, xi, eta, dx, dy):
-    """Shape function gradients dx, dy (4,) at (xi, eta); returns det J (dx, dy unset if <= 0)."""
-    for i in range(4):
-        dx[i] = 0.25 * XI[i] * (1.0 + ETA[i] * eta)
-        dy[i] = 0.25 * ETA[i] * (1.0 + XI[i] * xi)
-    return _map_grad(xe, dx, dy)
-
-
-@njit(cache=True)
-def _point_grad(xe, ip, dx, dy):
-    """_ip_grad at the 2x2 point ip, from the shape derivatives tabulated there (the same
-    values, so the same bits)."""
-    for i in range(4):
-        dx[i] = DXI[ip, i]
-        dy[i] = DETA[ip, i]
-    return _map_grad(xe, dx, dy)
 
 
 @njit(cache=True)
@@ -264,8 +227,10 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, 
             fe[i, 0] = 0.0
             fe[i, 1] = 0.0
         for ip in range(4):
+            xi = GP * XI[ip]
+            eta = GP * ETA[ip]
             # Stress update with the mid-step gradients at this point
-            if _point_grad(xm, ip, dx, dy) <= 0.0:
+            if _ip_grad(xm, xi, eta, dx, dy) <= 0.0:
                 return e
             gxx, gxy, gyx, gyy = _grad(ue, dx, dy)
             c, sn = _cayley(0.5 * (gxy - gyx))
@@ -279,7 +244,7 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, 
             if status != 0:
                 return e
             # Forces and work with the current gradients and volume
-            dv = _point_grad(xc, ip, dx, dy)
+            dv = _ip_grad(xc, xi, eta, dx, dy)
             if dv <= 0.0:
                 return e
             ewint[e] += w * dv

@@ -209,14 +209,11 @@ def _write_estimate(estimate, path, ranks):
     """The converged estimate and where it came from, as JSON (written atomically)."""
     import json
 
+    from pdfem.tools.analysis.summary import _plain, _write
     from pdfem.tools.provenance import provenance
-    from pdfem.tools.study.pareto import estimate_table
 
-    tmp = path + ".part"
-    with open(tmp, "w") as fh:
-        json.dump({"provenance": provenance(ranks), "estimate": estimate_table(estimate)}, fh,
-                  indent=1, allow_nan=True)
-    os.replace(tmp, path)
+    body = {"provenance": provenance(ranks), "estimate": estimate}
+    _write(path, json.dumps(_plain(body), indent=1) + "\n")
 
 
 def _print_convergence(comm, sizes, rules):

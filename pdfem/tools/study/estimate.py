@@ -66,20 +66,25 @@ def observed_order(h, q):
     return 0.5 * (lo + hi)
 
 
+def _extrapolated(h, q, p):
+    """Value at h -> 0 of the last two points of a ladder converging at order p."""
+    return q[-1] + (q[-1] - q[-2]) * h[-1] ** p / (h[-2] ** p - h[-1] ** p)
+
+
 def ladder_estimate(levels, values, se=0.0):
     """Converged estimate of one rule's ladder: a dict with ``value``, ``uncertainty``,
     ``order`` (the observed one, None when oscillating or from two levels), ``order_used``,
     ``how`` (words) and ``levels`` (those used); None when fewer than two finite points.
-    ``levels`` ascending; ``se``: standard error of the finest value (added as 2 se)."""
+    ``se``: standard error of the finest finite value (added as 2 se)."""
     pts = [(lv, v) for lv, v in sorted(zip(levels, values, strict=True)) if math.isfinite(v)]
     if len(pts) < 2:
         return None
     h = [1.0 / lv for lv, _ in pts]
     q = [v for _, v in pts]
     if len(pts) == 2:
-        p_obs, p, fs = None, P_FORMAL, SAFETY_2
-        value = q[-1] + (q[-1] - q[-2]) * h[-1] ** p / (h[-2] ** p - h[-1] ** p)
-        unc, how = fs * abs(value - q[-1]), "two levels, order 2 assumed"
+        p_obs, p = None, P_FORMAL
+        value = _extrapolated(h, q, p)
+        unc, how = SAFETY_2 * abs(value - q[-1]), "two levels, order 2 assumed"
     else:
         p_obs = observed_order(h, q)
         if p_obs is None and q[-1] == q[-2] == q[-3]:
@@ -90,7 +95,7 @@ def ladder_estimate(levels, values, se=0.0):
             how = "oscillating: middle of the last three"
         else:
             p = min(max(p_obs, P_MIN), P_FORMAL)
-            value = q[-1] + (q[-1] - q[-2]) * h[-1] ** p / (h[-2] ** p - h[-1] ** p)
+            value = _extrapolated(h, q, p)
             unc = SAFETY_3 * abs(value - q[-1])
             if p_obs == 0.0:
                 how = f"differences not shrinking, order {p:.2f} assumed"
@@ -139,10 +144,9 @@ def converged(rows, quantities, se_keys=None):
     for key in quantities:
         per_rule = {}
         for rule in sorted({r["setting"].rule for r in grid}):
-            rs = sorted((r for r in grid if r["setting"].rule == rule),
+            rs = sorted((r for r in grid if r["setting"].rule == rule and math.isfinite(r[key])),
                         key=lambda r: r["setting"].level)
-            finest = rs[-1] if rs else {}
-            se = finest.get(se_keys[key], 0.0) if key in se_keys else 0.0
+            se = rs[-1].get(se_keys[key], 0.0) if rs and key in se_keys else 0.0
             per_rule[rule] = ladder_estimate([r["setting"].level for r in rs],
                                              [r[key] for r in rs], se)
         out[key] = {"rules": per_rule, "combined": combine(per_rule)}

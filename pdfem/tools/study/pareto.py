@@ -155,10 +155,3 @@ def estimate_lines(estimate):
                      f"({rel:.1f} %{flag}); " + "; ".join(parts))
     return lines
 
-
-def estimate_table(estimate):
-    """The estimate as plain data for the study's JSON: per quantity, the combined value,
-    uncertainty and agreement, and each rule's ladder estimate (SI units)."""
-    return {key: {"combined": (estimate.get(key) or {}).get("combined"),
-                  "rules": (estimate.get(key) or {}).get("rules", {})}
-            for key, *_ in QUANTITIES}

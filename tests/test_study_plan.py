@@ -126,3 +126,43 @@ def test_speed_rungs_sides_periodic_or_walls():
     assert sp.periodic_doc(walled) == {**doc, "walls": {}}
     for d in (walled, doc):
         assert parse_scene(sp.rung_doc(d, 1500.0, "2x2", 1), ".", name="rung").resolved
+
+
+def test_accuracy_at_speed_scales_from_the_scenes_own_piston(tmp_path):
+    """study accuracy --speed V: the packaged scene's piston at V, as study speeds builds its
+    rung (the scene's times scaled from its own 288 m/s); the same scene written at 1000 m/s
+    scales from 1000; a scene whose hammer is not driven is refused naming the key."""
+    import tomllib
+    from importlib import resources
+
+    import pytest
+
+    from pdfem.cli.study import _at_speed
+    from pdfem.errors import InputError
+    from pdfem.scene import load_scene, parse_scene
+    from pdfem.tools.study import speeds as sp
+
+    path = str(resources.files("pdfem") / "scenes" / "shot912_small.toml")
+    with open(path, "rb") as fh:
+        doc = tomllib.load(fh)
+    scene = load_scene(path)
+    fast, fast_scene = _at_speed(doc, scene, path, 1500.0)
+    el = scene.resolved["element"]
+    want = sp.rung_doc(sp.packaged_doc("small"), 1500.0, el["rule"], el["level"])
+    want["grains_file"]["path"] = fast["grains_file"]["path"]
+    assert fast == want
+    assert str(fast_scene.path) == path
+    assert fast_scene.resolved["time"]["end"] == fast["time"]["end"]
+    # Written at 1000 m/s: going to 1500 scales by 1000/1500, not 288/1500
+    at1000 = sp.piston_doc(doc, 1000.0, el["rule"], el["level"])
+    again, _ = _at_speed(at1000, parse_scene(at1000, scene.base_dir, path=path), path, 1500.0)
+    (b1,), (b2,) = ([b for b in d["bc"] if "release" in b] for d in (again, fast))
+    for a, b in ((again["time"]["end"], fast["time"]["end"]), (b1["release"], b2["release"]),
+                 (b1["ramp_down"], b2["ramp_down"])):
+        assert math.isclose(a, b, rel_tol=1e-12)
+    # No driven hammer
+    free = {**doc, "bc": [b for b in doc["bc"] if b.get("type") != "velocity"]}
+    with pytest.raises(InputError, match=r"shot912_small.toml: bc: --speed needs"):
+        _at_speed(free, parse_scene(free, scene.base_dir, path=path), path, 1500.0)
+    with pytest.raises(InputError, match=r"--speed: -1.0 is not a speed"):
+        _at_speed(doc, scene, path, -1.0)

@@ -91,6 +91,10 @@ def _accuracy_args(p):
     p.add_argument("--levels", default="1,2,3,4", help="grain mesh levels, 6 level^2 quads per "
                    "grain; multiples of the bed file's level (default 1,2,3,4)")
     p.add_argument("--rules", default="1pt,2x2", help="element rules (default 1pt,2x2)")
+    p.add_argument("--speed", type=float, default=None, help="the driven hammer at this speed "
+                   "[m/s]: its velocity set, the scene's times scaled by its own speed over "
+                   "this one and the piston held until the slowest front has crossed the bed, "
+                   "as study speeds does (default: the scene as written)")
     p.add_argument("--safety", default="0.9,0.5,0.25", help="time.safety factors; the grid "
                    "runs at the scene's, the others around the baseline (default 0.9,0.5,0.25)")
     p.add_argument("--kn0-scale", default="0.1,1,10", help="factors on the contact stiffness "
@@ -166,6 +170,8 @@ def _accuracy(args):
         raise InputError(f"{path}: contact: --kn0-scale needs a scene with a [contact] table")
     with open(path, "rb") as fh:
         doc = tomllib.load(fh)
+    if args.speed is not None:
+        doc, scene = _at_speed(doc, scene, path, args.speed)
     folder = _outputs(args.prefix, args.force, (".csv", ".json", ".png"))
     study = acc.AccuracyStudy(doc, scene, folder, comm)
     study.check_levels(levels)
@@ -187,7 +193,7 @@ def _accuracy(args):
         from pdfem.tools.study.plots import accuracy_plot
 
         pareto.write_csv(rows, args.prefix + ".csv")
-        _write_estimate(study.estimate, args.prefix + ".json", comm.size)
+        _write_estimate(study.estimate, args.prefix + ".json", comm.size, path, args.speed)
         accuracy_plot(rows, args.tol, args.prefix + ".png", study.estimate)
         print("", *pareto.table_lines(rows), "", sep="\n")
         print("errors in % against the converged estimate; * = on the Pareto front of worst "
@@ -205,14 +211,39 @@ def _accuracy(args):
     return 0
 
 
-def _write_estimate(estimate, path, ranks):
-    """The converged estimate and where it came from, as JSON (written atomically)."""
+def _at_speed(doc, scene, path, speed):
+    """The scene dict and checked scene with the driven hammer at ``speed``
+    (pdfem.tools.study.speeds.rung_doc, scaled from the hammer condition's own speed);
+    InputError when the scene has no hammer driven at a constant velocity."""
+    from pdfem.scene import parse_scene
+    from pdfem.tools.study.speeds import rung_doc
+
+    if not 0.0 < speed < 1.0e5:
+        raise InputError(f"--speed: {speed!r} is not a speed in (0, 1e5) m/s")
+    hammer = scene.resolved["shock"].get("hammer")
+    driven = [bc for bc in scene.resolved.get("bc", [])
+              if bc.get("body") == hammer and bc.get("type") == "velocity"]
+    own = math.hypot(*driven[0]["velocity"]) if driven else 0.0
+    if not own > 0.0:
+        raise InputError(f"{path}: bc: --speed needs the shock hammer driven by a velocity "
+                         "condition")
+    element = scene.resolved["element"]
+    doc = rung_doc(doc, speed, element["rule"], element["level"], written_for=own,
+                   base_dir=scene.base_dir)
+    return doc, parse_scene(doc, scene.base_dir, name=f"{path} at {speed:g} m/s",
+                            path=scene.path)
+
+
+def _write_estimate(estimate, path, ranks, scene, speed):
+    """The converged estimate and where it came from (provenance, the scene file and the
+    --speed it ran at, null for the scene's own), as JSON (written atomically)."""
     import json
 
     from pdfem.tools.analysis.summary import _plain, _write
     from pdfem.tools.provenance import provenance
 
-    body = {"provenance": provenance(ranks), "estimate": estimate}
+    body = {"provenance": provenance(ranks), "scene": scene, "speed": speed,
+            "estimate": estimate}
     _write(path, json.dumps(_plain(body), indent=1) + "\n")
 
 

@@ -66,14 +66,15 @@ def walls_doc(doc):
     return d
 
 
-def piston_doc(doc, speed, rule, level, mesh=None, hold=0.0):
+def piston_doc(doc, speed, rule, level, mesh=None, hold=0.0, written_for=SCENE_SPEED):
     """A rung: ``doc`` with the piston at ``speed`` (hammer block and velocity condition),
-    its end, release, ramp-down and output intervals scaled by SCENE_SPEED / speed, and the
-    element rule and level (and mesh, when given) of the rung; a release that would start
-    bringing the piston to rest before ``hold`` [s] moves to hold + ramp-down, and the end by
-    as much. ``doc`` is not changed."""
+    its end, release, ramp-down and output intervals scaled by written_for / speed (the
+    piston speed the scene's times are written for), and the element rule and level (and
+    mesh, when given) of the rung; a release that would start bringing the piston to rest
+    before ``hold`` [s] moves to hold + ramp-down, and the end by as much. ``doc`` is not
+    changed."""
     d = copy.deepcopy(doc)
-    f = SCENE_SPEED / speed
+    f = written_for / speed
     for b in d.get("blocks", []) + d.get("bc", []):
         if "velocity" in b:
             b["velocity"] = [0.0, -speed]
@@ -112,14 +113,16 @@ def crossing_time(scene, speed):
     return H0 / us
 
 
-def rung_doc(doc, speed, rule, level, mesh=None):
+def rung_doc(doc, speed, rule, level, mesh=None, written_for=SCENE_SPEED, base_dir="."):
     """:func:`piston_doc` with the piston held until the slowest front has crossed the bed
-    (:func:`crossing_time` of the rung's own meshes)."""
+    (:func:`crossing_time` of the rung's own meshes; relative paths from ``base_dir``)."""
     from pdfem.scene import parse_scene
 
-    first = parse_scene(piston_doc(doc, speed, rule, level, mesh), ".",
+    first = parse_scene(piston_doc(doc, speed, rule, level, mesh, written_for=written_for),
+                        base_dir,
                         name=f"{doc.get('output', {}).get('path', 'scene')} at {speed:g} m/s")
-    return piston_doc(doc, speed, rule, level, mesh, hold=crossing_time(first, speed))
+    return piston_doc(doc, speed, rule, level, mesh, hold=crossing_time(first, speed),
+                      written_for=written_for)
 
 
 def rung_name(rung):

@@ -194,7 +194,8 @@ def _accuracy(args):
 
         pareto.write_csv(rows, args.prefix + ".csv")
         _write_estimate(study.estimate, args.prefix + ".json", comm.size, path, args.speed)
-        accuracy_plot(rows, args.tol, args.prefix + ".png", study.estimate)
+        accuracy_plot(rows, args.tol, args.prefix + ".png", study.estimate,
+                      _figure_header(comm.size))
         print("", *pareto.table_lines(rows), "", sep="\n")
         print("errors in % against the converged estimate; * = on the Pareto front of worst "
               "error versus wall time")
@@ -232,6 +233,17 @@ def _at_speed(doc, scene, path, speed):
                    base_dir=scene.base_dir)
     return doc, parse_scene(doc, scene.base_dir, name=f"{path} at {speed:g} m/s",
                             path=scene.path)
+
+
+def _figure_header(ranks):
+    """The line over a study's figure: date, commit, machine and the command that made it."""
+    import sys
+
+    from pdfem.tools.provenance import provenance
+
+    p = provenance(ranks)
+    command = " ".join(["python -m pdfem", *sys.argv[1:]])
+    return f"{p['date']}, commit {p['commit']}, {p['machine']}: {command}"
 
 
 def _write_estimate(estimate, path, ranks, scene, speed):

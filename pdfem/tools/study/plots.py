@@ -34,13 +34,16 @@ def _plain_ticks(ax):
         axis.set_minor_formatter(fmt)
 
 
-def accuracy_plot(rows, tol, path, estimate=None):
+def accuracy_plot(rows, tol, path, estimate=None, header=None):
     """Left: each run's worst relative error against its wall time, the Pareto front and the
     tolerance; right: each quantity's error against quads per grain for the level x rule
     grid, errors against the converged estimate, and (dotted, with ``estimate``: the
-    pdfem.tools.study.estimate.converged dict) each estimate's own relative band."""
+    pdfem.tools.study.estimate.converged dict) each estimate's own relative band. ``header``:
+    a line over both (where the figure came from)."""
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12.5, 5.0))
     fig.subplots_adjust(wspace=0.3)
+    if header:
+        fig.suptitle(header, fontsize=8)
     # Worst error against wall time, one marker per run
     shown = set()
     for r in rows:

@@ -11,7 +11,7 @@ from tests.helpers import pdfem, sigterm_when
 from tests.scenes import drifting_grains, write_scene
 
 COLUMNS = ["run", "axis", "level", "quads_per_grain", "rule", "safety", "kn0_scale", "wall_s",
-           "steps", "us", "arrival", "hammer_stress", "packing", "err_us", "err_arrival",
+           "steps", "us", "arrival", "hammer_stress", "packing", "us_se", "err_us", "err_arrival",
            "err_hammer_stress", "err_packing", "err_max", "pareto", "status", "run_file"]
 
 
@@ -29,12 +29,13 @@ def test_tiny_accuracy_study_on_2_ranks(tmp_path):
         ("L2-2x2-s0.5-k1", "grid")]
     assert [r["axis"] for r in rows[4:]] == ["safety"] and rows[4]["safety"] == "0.9"
     for r in rows:
-        assert float(r["wall_s"]) > 0 and r["status"] == "ok"
+        assert float(r["wall_s"]) > 0 and r["status"] == "ok" and float(r["us_se"]) > 0
         assert (tmp_path / r["run_file"]).is_file()
     # The converged estimate: each rule's two levels extrapolated at order 2, then combined;
     # every error is against the combined value
     body = json.loads((tmp_path / "acc.json").read_text())
     assert body["provenance"]["ranks"] == 2
+    assert body["scene"].endswith("shot912_small.toml") and body["speed"] is None
     est = body["estimate"]["us"]
     for rule, (coarse, fine) in (("1pt", rows[0:3:2]), ("2x2", rows[1:4:2])):
         q1, q2 = float(coarse["us"]), float(fine["us"])

@@ -9,7 +9,7 @@ import csv
 import math
 import os
 
-from pdfem.tools.study.quantities import QUANTITIES
+from pdfem.tools.study.quantities import QUANTITIES, SE_KEYS
 
 
 def add_errors(rows, ref):
@@ -82,12 +82,14 @@ def _finite(v):
 
 
 def csv_row(r):
-    """One row of the CSV file: the setting, cost, values (SI), relative errors, flags."""
+    """One row of the CSV file: the setting, cost, values (SI) and their standard errors
+    where measured, relative errors, flags."""
     s = r["setting"]
     out = {"run": s.label, "axis": s.axis, "level": s.level, "quads_per_grain": s.quads,
            "rule": s.rule, "safety": s.safety, "kn0_scale": s.kn0_scale,
            "wall_s": r["wall_s"], "steps": r["steps"]}
     out.update({k: r[k] for k, *_ in QUANTITIES})
+    out.update({se: r.get(se, math.nan) for se in SE_KEYS.values()})
     out.update({"err_" + k: r["err_" + k] for k, *_ in QUANTITIES})
     out.update(err_max=r["err_max"], pareto=int(r["pareto"]), status=r["status"],
                run_file=r["run_file"])

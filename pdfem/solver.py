@@ -394,11 +394,12 @@ class Simulation:
         return min(self.safety * dt_stable, self.dt_max)
 
     def _moves_half_skin(self, dt_next, dt_avg):
-        """This rank's bound: may the next position update move an owned grain node half the
-        skin from where it was at the last rebuild (global bodies never migrate)?"""
+        """This rank's bound: may the next position update move an owned node half the skin
+        from where it was at the last rebuild? Grain nodes and the blocks' (global bodies never
+        migrate, but their contact candidates are found at the rebuilds)."""
         s = self.store
-        return moves_half_skin(s.x, s.xref, s.v, self.f, s.m, s.bcf, s.bcv, s.nn_global,
-                               s.nn_own, dt_next, dt_avg, 0.5 * self.skin)
+        return moves_half_skin(s.x, s.xref, s.v, self.f, s.m, s.bcf, s.bcv, 0, s.nn_own,
+                               dt_next, dt_avg, 0.5 * self.skin)
 
     def refresh_reductions(self):
         """What the time step's reduction carries, for a state whose step has not ended

@@ -263,3 +263,38 @@ def test_per_contact_slip_and_dissipation_of_a_sliding_block(tmp_path):
         assert (rows["heat"] == 0.0).all()
     assert np.mean(fn) == pytest.approx(weight, rel=0.05)
     assert np.mean(diss) == pytest.approx(np.mean(bound), rel=0.02)
+
+
+def test_block_candidates_of_a_rebuild_hold_every_later_block_contact(tmp_path):
+    """Blocks are searched at the rebuilds, with the skin, their nodes in the rebuild test:
+    at every step every block pair whose boxes overlap (the search the step would make) is
+    among the candidates, on the small shot-912 bed hit at 1500 m/s (periodic sides)."""
+    from pdfem.effects.contact_candidates import block_elements
+    from pdfem.tools.study.speeds import packaged_doc, rung_doc
+
+    doc = rung_doc(packaged_doc("small"), 1500.0, "1pt", 1)
+    doc["time"]["end"] = 2.0e-7
+    sim = Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF)
+    eff = _contact(sim)
+    rebuilds = touching = 0
+    while sim.t < sim.t_end:
+        store = sim.store
+        sim.step()
+        rebuilds += sim.store is not store
+        st, s, g0 = sim.state, sim.store, sim.ctx.nglobal
+        bbox = np.empty((s.nelem, 4))
+        element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
+        boxes = np.array([[bbox[e0:e0 + n, 0].min(), bbox[e0:e0 + n, 1].min(),
+                           bbox[e0:e0 + n, 2].max(), bbox[e0:e0 + n, 3].max()]
+                          for e0, n in zip(s.estart, s.ne, strict=True)])
+        pairs = eff.detect._element_pairs(st, sim.ctx, bbox,
+                                          eff.detect._block_pairs(st, sim.ctx, boxes, 0.0), 0.0)
+        walls, wids = eff.detect._wall_elements(st, sim.ctx, bbox, 0, block_elements(s, g0),
+                                                0.0)
+        now = {tuple(r) for r in pairs} | {(e, -1 - w, 0) for e, w in zip(walls, wids,
+                                                                         strict=True)}
+        assert now <= {tuple(r) for r in eff.detect.cand}, f"step {sim.nstep}"
+        keys, active = eff.last["keys"], eff.last["active"]
+        touching += int(((active == C_ACTIVE) & np.isin(keys[:, 2], s.gid[:g0])).sum() > 0)
+    # The hammer moves half the skin before the bed does: rebuilds from its motion alone
+    assert rebuilds >= 3 and touching > 100 and len(pairs) > 0

@@ -6,8 +6,9 @@ inflated by the skin, overlap. Their boundary-element pairs whose boxes are with
 and the owned grains' boundary elements within the skin of a domain wall, are the step's
 candidates, sorted once by contact key. No pair can come into contact before the next
 rebuild, since rebuilds happen whenever a node may have moved half the skin. Blocks (global
-bodies) move freely: every step they are checked against every owned grain, and their
-candidates merged into the list in key order (:meth:`Candidates.step`).
+bodies) are checked against every owned grain at the same rebuilds, their nodes counted in
+that test like the grains': their element pairs and wall elements within the skin are merged
+into the list in key order.
 
 With periodic sides each candidate carries a third column, the period shift k of its second
 element (met k box widths to the right). Grains are never moved back into the box (a grain's
@@ -77,9 +78,10 @@ def lexorder(keys):
 
 
 class Candidates:
-    """The candidates of one rank: built at each rebuild (:meth:`rebuild`), merged with the
-    blocks' each step (:meth:`step`); walls given by their points and inward normals; with
-    deep, element pairs reach past the boundary elements (:func:`candidate_pairs`)."""
+    """The candidates of one rank, the blocks' among them: built at each rebuild
+    (:meth:`rebuild`), the same every step until the next (:meth:`step`); walls given by
+    their points and inward normals; with deep, element pairs reach past the boundary
+    elements (:func:`candidate_pairs`)."""
 
     def __init__(self, wall_p0, wall_n, deep=False):
         self._wall_p0, self._wall_n = wall_p0, wall_n
@@ -111,29 +113,46 @@ class Candidates:
         reach = ctx.skin * (1.0 + REACH_SLACK)
         epairs = self._element_pairs(st, ctx, bbox, pairs, reach)
         welems, wids = self._wall_elements(st, ctx, bbox, block_elements(s, g0), s.ne_own, reach)
-        self.cand = sorted_candidates(s, epairs, welems, wids)
+        cand = sorted_candidates(s, epairs, welems, wids)
         if ctx.grid.periodic_x:
-            twice = repeated_pairs(self.cand)
+            twice = repeated_pairs(cand)
             if twice:
                 ctx.fail(f"periodic sides: {twice} element pair(s) within the skin of each "
                          "other through both sides of the box; widen domain.box")
+        self.cand = self._with_blocks(st, ctx, cand, bbox, boxes, reach)
 
-    def _block_pairs(self, st, ctx, boxes):
-        """Owned grains near each block, and the block pairs (blocks move freely: every
-        step), with the block's period shift (each shift at which the boxes overlap)."""
+    def _with_blocks(self, st, ctx, cand, bbox, boxes, reach):
+        """The grains' candidates merged in key order with the blocks' (element pairs and
+        wall elements within reach)."""
+        s, g0 = st.store, ctx.nglobal
+        if g0 == 0:
+            return cand
+        pairs = self._element_pairs(st, ctx, bbox, self._block_pairs(st, ctx, boxes, reach),
+                                    reach)
+        welems, wids = self._wall_elements(st, ctx, bbox, 0, block_elements(s, g0), reach)
+        blocks = sorted_candidates(s, pairs, welems, wids)
+        out = np.empty((cand.shape[0] + blocks.shape[0], 3), np.int64)
+        merge_candidates(cand, blocks, s.elem_gid, s.elem_loc, out)
+        return out
+
+    def _block_pairs(self, st, ctx, boxes, reach):
+        """Owned grains within reach of each block, and the block pairs, with the block's
+        period shift (each shift at which the boxes come within reach)."""
         s, g0, w = st.store, ctx.nglobal, ctx.grid.period
         parts = [np.zeros((0, 3), np.int64)]
         own = np.arange(g0, s.nb_own)
         for g in range(g0):
             b = boxes[g]
-            rows = own[(boxes[own, 1] <= b[3]) & (boxes[own, 3] >= b[1])]
-            # The shifts that can bring the block's box over a grain's (0 without a period)
+            rows = own[(boxes[own, 1] <= b[3] + reach) & (boxes[own, 3] >= b[1] - reach)]
+            # The shifts that can bring the block's box within reach of a grain's (0 without a
+            # period)
             k0 = k1 = 0
             if w > 0.0 and rows.size:
-                k0 = math.ceil((boxes[rows, 0].min() - b[2]) / w)
-                k1 = math.floor((boxes[rows, 2].max() - b[0]) / w)
+                k0 = math.ceil((boxes[rows, 0].min() - b[2] - reach) / w)
+                k1 = math.floor((boxes[rows, 2].max() - b[0] + reach) / w)
             for k in range(k0, k1 + 1):
-                near = rows[(boxes[rows, 0] <= b[2] + k * w) & (boxes[rows, 2] >= b[0] + k * w)]
+                near = rows[(boxes[rows, 0] <= b[2] + k * w + reach)
+                            & (boxes[rows, 2] >= b[0] + k * w - reach)]
                 parts.append(np.stack([near, np.full(near.shape[0], g),
                                        np.full(near.shape[0], k)], axis=1))
             for h in range(g + 1, g0):
@@ -167,18 +186,5 @@ class Candidates:
             self._wall_out = np.zeros((2, 2 * m), np.int64)
 
     def step(self, st, ctx):
-        """This step's candidates: those of the last rebuild, merged in key order with the
-        blocks' (element pairs and walls whose boxes overlap now)."""
-        s, g0 = st.store, ctx.nglobal
-        if g0 == 0:
-            return self.cand
-        bbox = np.empty((s.nelem, 4))
-        element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
-        boxes = np.empty((s.nbody, 4))
-        body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
-        pairs = self._element_pairs(st, ctx, bbox, self._block_pairs(st, ctx, boxes), 0.0)
-        welems, wids = self._wall_elements(st, ctx, bbox, 0, block_elements(s, g0), 0.0)
-        blocks = sorted_candidates(s, pairs, welems, wids)
-        cand = np.empty((self.cand.shape[0] + blocks.shape[0], 3), np.int64)
-        merge_candidates(self.cand, blocks, s.elem_gid, s.elem_loc, cand)
-        return cand
+        """This step's candidates: those of the last rebuild, the blocks' among them."""
+        return self.cand

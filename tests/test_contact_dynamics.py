@@ -268,20 +268,30 @@ def test_per_contact_slip_and_dissipation_of_a_sliding_block(tmp_path):
 def test_block_candidates_of_a_rebuild_hold_every_later_block_contact(tmp_path):
     """Blocks are searched at the rebuilds, with the skin, their nodes in the rebuild test:
     at every step every block pair whose boxes overlap (the search the step would make) is
-    among the candidates, on the small shot-912 bed hit at 1500 m/s (periodic sides)."""
+    among the candidates, on the small shot-912 bed hit at 1500 m/s (periodic sides) by a
+    hammer that starts 0.4 mm above it (only the hammer moves until it arrives)."""
     from pdfem.effects.contact_candidates import block_elements
     from pdfem.tools.study.speeds import packaged_doc, rung_doc
 
     doc = rung_doc(packaged_doc("small"), 1500.0, "1pt", 1)
-    doc["time"]["end"] = 2.0e-7
+    gap = 4.0e-4
+    doc["domain"]["box"][3] += gap
+    (hammer,) = [b for b in doc["blocks"] if b["name"] == "hammer"]
+    hammer["box"][1] += gap
+    hammer["box"][3] += gap
+    doc["time"]["end"] = 4.0e-7
     sim = Simulation(parse_scene(doc, str(tmp_path)), MPI.COMM_SELF)
     eff = _contact(sim)
     rebuilds = touching = 0
+    s, g0 = sim.store, sim.ctx.nglobal
+    top = s.x[s.nn_global:, 1].max()
     while sim.t < sim.t_end:
         store = sim.store
         sim.step()
-        rebuilds += sim.store is not store
-        st, s, g0 = sim.state, sim.store, sim.ctx.nglobal
+        st, s = sim.state, sim.store
+        # Rebuilds while the hammer (the highest block) is still above the bed: its own
+        face = max(s.x[s.nstart[b]:s.nstart[b] + s.nn[b], 1].min() for b in range(g0))
+        rebuilds += face > top and s is not store
         bbox = np.empty((s.nelem, 4))
         element_bboxes(s.x, s.conn, 0, s.nelem, bbox)
         boxes = np.array([[bbox[e0:e0 + n, 0].min(), bbox[e0:e0 + n, 1].min(),

@@ -395,10 +395,12 @@ class Simulation:
 
     def _moves_half_skin(self, dt_next, dt_avg):
         """This rank's bound: may the next position update move an owned node half the skin
-        from where it was at the last rebuild? Grain nodes and the blocks' (global bodies never
-        migrate, but their contact candidates are found at the rebuilds)."""
+        from where it was at the last rebuild? Grain nodes, and with contact the blocks' too
+        (global bodies never migrate, but their contact candidates are found at the
+        rebuilds)."""
         s = self.store
-        return moves_half_skin(s.x, s.xref, s.v, self.f, s.m, s.bcf, s.bcv, 0, s.nn_own,
+        n0 = 0 if self.has_contact else s.nn_global
+        return moves_half_skin(s.x, s.xref, s.v, self.f, s.m, s.bcf, s.bcv, n0, s.nn_own,
                                dt_next, dt_avg, 0.5 * self.skin)
 
     def refresh_reductions(self):

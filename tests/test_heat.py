@@ -170,12 +170,13 @@ def test_a_heat_source_that_no_mechanics_pays_for_trips_the_energy_guard(tmp_pat
     assert summary["balance_error"] < 0.01
 
     sim = compressed_sand(tmp_path, {"guards": {"energy_drift": 0.05}, **extra}, end=4.0e-5)
-    heat, s = sim.heat, sim.store
+    heat = sim.heat
     plain = type(heat).heat
-    last = s.ewp.copy()
+    last = sim.store.ewp.copy()
 
     def heat_twice(self, st, ctx):
         # beta x the step's plastic work once more, on the element's nodes and in the books
+        s = st.store
         extra_heat = 0.8 * (s.ewp - last)
         last[:] = s.ewp
         element_to_nodes(s.x, s.conn, 0, s.ne_own, extra_heat, self.src)
@@ -200,6 +201,7 @@ def test_thermoelastic_block_expands_by_the_thermal_strain(tmp_path):
     w0 = s.x[:, 0].max() - s.x[:, 0].min()
     while sim.t < sim.t_end:
         sim.step()
+    s = sim.store
     strain = (s.x[:, 0].max() - s.x[:, 0].min()) / w0 - 1.0
     assert strain == pytest.approx((1 + nu) * alpha * 100.0, rel=0.01)
     assert np.all(s.T == 400.0)

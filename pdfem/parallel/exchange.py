@@ -77,7 +77,8 @@ def neighbour_ranks(grid, owner, cells, reach=1):
 
 
 def _history_rows(batches, fields, keep_gids, global_gids):
-    """Unique history rows (by key) that involve a kept grain or only global bodies."""
+    """Unique history rows (by key) that involve a kept grain, or only global bodies and
+    walls (a block against a block or a wall: every rank keeps those)."""
     keys = np.concatenate([b.a["hkey"] for b in batches])
     vals = np.concatenate([b.a["hval"] for b in batches])
     if keys.shape[0] == 0:
@@ -86,7 +87,7 @@ def _history_rows(batches, fields, keep_gids, global_gids):
     vals = vals[first]
     a, b = keys[:, 0], keys[:, 2]
     mine = np.isin(a, keep_gids) | np.isin(b, keep_gids)
-    both_global = np.isin(a, global_gids) & np.isin(b, global_gids)
+    both_global = np.isin(a, global_gids) & (np.isin(b, global_gids) | (b < 0))
     sel = mine | both_global
     return keys[sel], vals[sel]
 

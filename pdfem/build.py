@@ -18,7 +18,8 @@ from pdfem.store import Batch
 MODELS = {"elastic": P.ELASTIC, "cap": P.CAP}
 # Scene keys of the cap model -> parameter columns
 CAP_KEYS = {"A": P.CAP_A, "B": P.CAP_B, "C": P.CAP_C, "D": P.CAP_D, "R": P.CAP_R,
-            "W": P.CAP_W, "kappa0": P.CAP_KAPPA0, "tension_cutoff": P.CAP_T, "tol": P.CAP_TOL}
+            "W": P.CAP_W, "kappa0": P.CAP_KAPPA0, "tension_cutoff": P.CAP_T, "tol": P.CAP_TOL,
+            "relaxation_time": P.CAP_TAU}
 
 
 def material_table(materials):

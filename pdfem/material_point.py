@@ -34,8 +34,8 @@ INCREMENT_S = 3.0e-5
 # [materials.NAME] key -> parameter column, for model = "cap"
 CAP_KEYS = {"density": P.RHO, "bulk": P.BULK, "shear": P.SHEAR, "A": P.CAP_A, "B": P.CAP_B,
             "C": P.CAP_C, "D": P.CAP_D, "R": P.CAP_R, "W": P.CAP_W, "kappa0": P.CAP_KAPPA0,
-            "tension_cutoff": P.CAP_T, "tol": P.CAP_TOL}
-CAP_OPTIONAL = ("tension_cutoff", "tol")
+            "tension_cutoff": P.CAP_T, "tol": P.CAP_TOL, "relaxation_time": P.CAP_TAU}
+CAP_OPTIONAL = ("tension_cutoff", "tol", "relaxation_time")
 # Keys a scene's cap material may hold that this isothermal driver does not use (thermal and
 # temperature-dependence keys): the scene schema's keys of the cap model less the ones above
 # The equation of state's keys, which the driver applies (pdfem.kernels.eos)
@@ -93,6 +93,8 @@ def cap_params_from_table(tbl, where="materials.NAME", strict=True):
     if "tension_cutoff" not in tbl:
         b, c = p[P.CAP_B], p[P.CAP_C]
         p[P.CAP_T] = math.log(p[P.CAP_A] / c) / b if b > 0.0 and c > 0.0 else 0.0
+    if p[P.CAP_TAU] < 0.0:
+        raise InputError(f"{where}.relaxation_time: must be >= 0 (got {p[P.CAP_TAU]:g})")
     if "tol" in tbl and not 0.0 < p[P.CAP_TOL] < 1e-2:
         raise InputError(f"{where}.tol: must be in (0, 1e-2) (got {p[P.CAP_TOL]:g})")
     _eos_into(tbl, where, p)
@@ -182,23 +184,24 @@ def read_path_csv(fname):
     return t
 
 
-def _update(p, sig, st, d):
-    """cap_update on copies; returns (sig, st, status, dwp)."""
+def _update(p, sig, st, d, dt):
+    """cap_update on copies over an increment of duration dt; returns (sig, st, status, dwp)."""
     s = sig.copy()
     t = st.copy()
     p = eos_row(p, s[0], s[1], s[3], d[0] + d[1] + d[3], np.empty(p.shape[0]))
-    status, dwp = cap_update(p, s, d, t)
+    status, dwp = cap_update(p, s, d, t, dt)
     return s, t, status, dwp
 
 
-def _mixed_increment(p, sig, st, d, held, target):
+def _mixed_increment(p, sig, st, d, held, target, dt=0.0):
     """Increment d with the held components' strains chosen so their stress stays at target.
 
-    Returns (sig, st, status, dwp, d) for the strain increment d actually applied.
+    Returns (sig, st, status, dwp, d) for the strain increment d actually applied (over a
+    duration dt: a rate-dependent material's).
     """
     h = np.flatnonzero(held)
     if h.size == 0:
-        return (*_update(p, sig, st, d), d)
+        return (*_update(p, sig, st, d, dt), d)
     # Elastic guess: hold the stress of the held components under the prescribed others
     kb, g2 = p[P.BULK], 2.0 * p[P.SHEAR]
     lam = kb - g2 / 3.0
@@ -210,7 +213,7 @@ def _mixed_increment(p, sig, st, d, held, target):
     # Newton with a finite-difference Jacobian
     scale = p[P.CAP_A] + np.abs(sig).max()
     for _ in range(40):
-        s, t, status, dwp = _update(p, sig, st, d)
+        s, t, status, dwp = _update(p, sig, st, d, dt)
         r = s[h] - target
         if status != 0 or np.abs(r).max() <= 1e-10 * scale:
             return s, t, status, dwp, d
@@ -219,7 +222,7 @@ def _mixed_increment(p, sig, st, d, held, target):
         for k, c in enumerate(h):
             dd = d.copy()
             dd[c] += eps
-            jac[:, k] = (_update(p, sig, st, dd)[0][h] - s[h]) / eps
+            jac[:, k] = (_update(p, sig, st, dd, dt)[0][h] - s[h]) / eps
         try:
             d[h] -= np.linalg.solve(jac, r)
         except np.linalg.LinAlgError:
@@ -229,19 +232,26 @@ def _mixed_increment(p, sig, st, d, held, target):
                           f"{np.abs(r).max():.3g})")
 
 
-def run_path(p, path, nsub, held=None):
+def run_path(p, path, nsub, held=None, strain_rate=None):
     """Drive a cap material point (row p) from zero strain and stress through ``path``.
 
     path: (nseg, 4) target total strains (xx, yy, xy, zz), each reached in nsub equal
     increments; held: optional (nseg, 4) bool, stress components held at their value at the
-    segment start (their path strains are ignored). Returns a dict of 1-D arrays keyed by
-    COLUMNS; row 0 is the initial state, wp the cumulative plastic work density.
+    segment start (their path strains are ignored); strain_rate [1/s]: an increment lasts its
+    largest prescribed strain component over it (required by a rate-dependent material,
+    p[CAP_TAU] > 0; ignored otherwise). Returns a dict of 1-D arrays keyed by COLUMNS; row 0
+    is the initial state, wp the cumulative plastic work density.
     """
     path = np.asarray(path, float).reshape(-1, 4)
     held = np.zeros(path.shape, bool) if held is None else np.asarray(held, bool)
     nsub = int(nsub)
     if nsub < 1:
         raise InputError(f"--nsub: must be >= 1 (got {nsub})")
+    if strain_rate is not None and not (math.isfinite(strain_rate) and strain_rate > 0.0):
+        raise InputError(f"--strain-rate: must be a rate > 0 in 1/s (got {strain_rate!r})")
+    if p[P.CAP_TAU] > 0.0 and strain_rate is None:
+        raise InputError("--strain-rate: needed by a material with relaxation_time > 0 (a "
+                         "rate-dependent point has no answer without the time of its path)")
     # More than MAX_INCREMENTS is a typo, not a material test (refused before any work)
     total = nsub * path.shape[0]
     if total > MAX_INCREMENTS:
@@ -260,8 +270,10 @@ def run_path(p, path, nsub, held=None):
         target = sig[hold].copy()
         d = (tgt - eps) / nsub
         d[hold] = 0.0
+        dt = np.abs(d).max() / strain_rate if strain_rate else 0.0
         for _ in range(nsub):
-            sig_new, st_new, status, dwp, d_used = _mixed_increment(p, sig, st, d, hold, target)
+            sig_new, st_new, status, dwp, d_used = _mixed_increment(p, sig, st, d, hold, target,
+                                                                    dt)
             if status != 0:
                 raise SimulationError(f"cap update failed with status {status} at step "
                                       f"{len(rows)} (strain {eps.tolist()})")

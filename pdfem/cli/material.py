@@ -32,6 +32,9 @@ def add_parser(subparsers):
                     help="extra axial strain of the triaxial path (default 4 x strain)")
     sp.add_argument("--nsub", type=int, default=50,
                     help="increments per path segment (default 50)")
+    sp.add_argument("--strain-rate", type=float, default=None, metavar="RATE",
+                    help="strain rate [1/s]: each increment lasts its largest strain component "
+                    "over RATE (needed by a material with relaxation_time > 0)")
     sp.add_argument("--out", default="material.csv", help="output CSV (default material.csv)")
     sp.add_argument("--force", action="store_true", help="overwrite an existing output CSV")
     return sp
@@ -88,6 +91,6 @@ def run(args):
     else:
         path, held = read_path_csv(args.path), None
     check_output_path(args.out, args.force, "--out")
-    res = run_path(p, path, args.nsub, held)
+    res = run_path(p, path, args.nsub, held, args.strain_rate)
     write_csv(args.out, res)
     return 0

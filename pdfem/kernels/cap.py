@@ -36,6 +36,21 @@ trial's mean stress |I1|/3: cap_substeps; at most NSUB_MAX), so results hardly d
 increment size: one increment vs ten differ by < 0.5 % of max(A, |sigma|) in the tests
 (kappa <= 0), by up to 4 % for paths crossing the kappa > 0 step.
 
+Rate dependence (p[CAP_TAU] = tau > 0): the Duvaut-Lions overstress form of the cap (Simo, Ju,
+Pister & Taylor, J. Eng. Mech. 114, 191, 1988). The rate-independent update above gives, from
+the same start, the stress sigma_bar and the state q_bar of the step; the viscoplastic point
+relaxes towards them over tau, backward Euler over the step dt:
+    sigma = (sigma_trial + (dt/tau) sigma_bar) / (1 + dt/tau),  q = q_n + r (q_bar - q_n),
+    r = dt / (tau + dt),
+for every state entry (kappa and the plastic strains, so that sigma = C:(eps - eps^p) still
+holds). The stress may stay outside the surface (the overstress); tau -> 0 gives r -> 1, the
+rate-independent update, and tau = 0 takes that update itself. A step of zero duration
+(dt = 0) is elastic. The plastic strain of the step is deps^p = C^-1:(sigma_trial - sigma) =
+r deps^p_bar, and its work r w_bar + (sigma - sigma_bar):deps^p = r (w_bar + (1 - r) (sigma_trial -
+sigma_bar):C^-1:(sigma_trial - sigma_bar)) >= 0, with w_bar the rate-independent update's own
+(substepped) plastic work: the end stress's sigma:deps^p with the rate-independent part taken
+along its path, so that it tends to the rate-independent work as tau -> 0.
+
 State row st (CAP_NST = 6): kappa, eps_v^p, eps^p (xx, yy, xy, zz).
 Status: 0 ok, 1 a local solve did not converge, 2 stress left outside the surface by more
 than tol (p[CAP_TOL], 1e-8 when 0) after the update, 3 non-finite input or result.
@@ -69,6 +84,7 @@ from pdfem.kernels.params import (
     CAP_KAPPA0,
     CAP_R,
     CAP_T,
+    CAP_TAU,
     CAP_TOL,
     CAP_W,
     SHEAR,
@@ -244,12 +260,62 @@ def _plastic_update(p, sig, st, d0, d1, d2, d3, over):
 
 
 @njit(cache=True)
-def cap_update(p, sig, deps, st):
+def _relaxed_update(p, sig, st, d0, d1, d2, d3, over, dt):
+    """Duvaut-Lions update (module docstring) of a trial with normalised overshoot over: the
+    rate-independent update from the same start, and the point relaxed towards it by
+    r = dt / (tau + dt)."""
+    t0, t1, t2, t3 = _trial(p, sig, d0, d1, d2, d3)
+    # The rate-independent stress and state of the step, from copies of the start
+    sb = sig.copy()
+    qb = st.copy()
+    status, dwb = _plastic_update(p, sb, qb, d0, d1, d2, d3, over)
+    r = dt / (p[CAP_TAU] + dt)
+    # Stress between the trial and the rate-independent stress; state likewise from q_n
+    sig[0] = t0 + r * (sb[0] - t0)
+    sig[1] = t1 + r * (sb[1] - t1)
+    sig[2] = t2 + r * (sb[2] - t2)
+    sig[3] = t3 + r * (sb[3] - t3)
+    for k in range(CAP_NST):
+        st[k] += r * (qb[k] - st[k])
+    # Plastic strain of the step, C^-1:(trial - sigma) = r times the rate-independent one,
+    # and its work: r times the rate-independent work plus the overstress's share
+    kb = p[BULK]
+    g2 = 2.0 * p[SHEAR]
+    i1 = sig[0] + sig[1] + sig[3]
+    m = i1 / 3.0
+    mt = (t0 + t1 + t3) / 3.0
+    dv = (t0 + t1 + t3 - i1) / (3.0 * kb)
+    e0 = ((t0 - mt) - (sig[0] - m)) / g2
+    e1 = ((t1 - mt) - (sig[1] - m)) / g2
+    e2 = (t2 - sig[2]) / g2
+    e3 = ((t3 - mt) - (sig[3] - m)) / g2
+    v3 = dv / 3.0
+    dwp = r * dwb + ((sig[0] - sb[0]) * (e0 + v3) + (sig[1] - sb[1]) * (e1 + v3)
+                     + (sig[3] - sb[3]) * (e3 + v3) + 2.0 * (sig[2] - sb[2]) * e2)
+    if not math.isfinite(sig[0] + sig[1] + sig[2] + sig[3] + st[0] + dwp):
+        return CAP_NONFINITE, dwp
+    return status, dwp
+
+
+@njit(cache=True)
+def plastic_update(p, sig, st, d0, d1, d2, d3, over, dt):
+    """The update of a point whose elastic trial lies outside (normalised overshoot over > 0)
+    over a step of duration dt: rate-independent (p[CAP_TAU] = 0) or relaxed (> 0).
+    Returns (status, dwp)."""
+    if p[CAP_TAU] > 0.0:
+        return _relaxed_update(p, sig, st, d0, d1, d2, d3, over, dt)
+    return _plastic_update(p, sig, st, d0, d1, d2, d3, over)
+
+
+@njit(cache=True)
+def cap_update(p, sig, deps, st, dt=0.0):
     """Cap model update of stress sig (4,) in place for strain increment deps (4,).
 
-    p: parameter row (params.py columns BULK, SHEAR, CAP_A .. CAP_TOL); st: state row of
-    length CAP_NST (see cap_initial_state). Returns (status, dwp) with dwp = sigma:deps^p >= 0
-    the plastic work density increment. On a nonzero status the state is left as computed.
+    p: parameter row (params.py columns BULK, SHEAR, CAP_A .. CAP_TAU); st: state row of
+    length CAP_NST (see cap_initial_state); dt: the step's duration, used only by a
+    rate-dependent point (p[CAP_TAU] > 0; a step of zero duration is elastic there).
+    Returns (status, dwp) with dwp = sigma:deps^p >= 0 the plastic work density increment.
+    On a nonzero status the state is left as computed.
     """
     d0, d1, d2, d3 = deps[0], deps[1], deps[2], deps[3]
     if not (math.isfinite(d0 + d1 + d2 + d3) and math.isfinite(sig[0] + sig[1] + sig[2]
@@ -267,14 +333,14 @@ def cap_update(p, sig, deps, st):
         sig[2] = t2
         sig[3] = t3
         return CAP_OK, 0.0
-    return _plastic_update(p, sig, st, d0, d1, d2, d3, over)
+    return plastic_update(p, sig, st, d0, d1, d2, d3, over, dt)
 
 
 def cap_check_params(p):
     """Return '' when the cap parameters of row p are usable, else a short reason."""
     kb, gs = p[BULK], p[SHEAR]
     a, b, c, d, r, w = p[CAP_A], p[CAP_B], p[CAP_C], p[CAP_D], p[CAP_R], p[CAP_W]
-    vals = (kb, gs, a, b, c, d, r, w, p[CAP_KAPPA0], p[CAP_T], p[CAP_TOL])
+    vals = (kb, gs, a, b, c, d, r, w, p[CAP_KAPPA0], p[CAP_T], p[CAP_TOL], p[CAP_TAU])
     # Finite values and positive moduli
     if not all(math.isfinite(v) for v in vals):
         return "cap parameters must be finite"
@@ -302,5 +368,7 @@ def cap_check_params(p):
         return "initial cap X(kappa0) = kappa0 - R F(kappa0) must be <= 0"
     if not 0.0 <= p[CAP_TOL] < 1e-2:
         return "tol must be in [0, 1e-2)"
+    if p[CAP_TAU] < 0.0:
+        return "need relaxation_time >= 0"
     return ""
 

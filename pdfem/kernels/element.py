@@ -109,14 +109,14 @@ def _grad(ue, dx, dy):
 
 
 @njit(cache=True)
-def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold, ebuf):
+def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold, ebuf, dt):
     """Objective update of one point stress s (4,).
 
     (gxx, gxy, gyx, gyy) is the mid-step gradient of du, (c, sn) the Cayley rotation of its
     skew part, dth the isotropic thermal strain increment (removed from the material's
     strain, sigma_zz included); ebuf receives the row of a material with an equation of
-    state (eos.eos_row). Returns (status, dwp, mechanical work density, thermal-strain work
-    density sigma:deps_th).
+    state (eos.eos_row); dt is the step's duration (a rate-dependent cap's). Returns
+    (status, dwp, mechanical work density, thermal-strain work density sigma:deps_th).
     """
     # Rotate the stress, Q sig Q^T with Q = [[c, sn], [-sn, c]]
     sxx = s[0]
@@ -134,7 +134,7 @@ def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold, ebuf):
         sold[k] = s[k]
     if p[EOS_S] > 0.0:
         p = eos_row(p, s[0], s[1], s[3], deps[0] + deps[1] + deps[3], ebuf)
-    status, dwp = material_update(p, s, deps, st)
+    status, dwp = material_update(p, s, deps, st, dt)
     # Stress power density, trapezoidal in time
     w = 0.5 * ((sold[0] + s[0]) * deps[0] + (sold[1] + s[1]) * deps[1]
                + 2.0 * (sold[2] + s[2]) * deps[2] + (sold[3] + s[3]) * deps[3])
@@ -190,14 +190,15 @@ def unloaded_at_rest(du, conn, sig, eth, e, has_th):
 
 @njit(cache=True)
 def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, e1,
-                  f, ewint, ewp, eth, rest=None):
+                  f, ewint, ewp, eth, rest=None, dt=0.0):
     """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hg and hg_model are ignored.
 
     Updates sig (ne,4,4) and mstate per point; subtracts internal forces from f element by
     element; adds stress work to ewint and plastic work to ewp (weights x current det J).
     eth (ne, 3) couples temperature in (see thermal_row); shape (0, 3) leaves it out.
     rest, an int64 array (1,), skips the elements unloaded at rest (unloaded_at_rest) and adds
-    their count to rest[0]; None (the default) computes every element.
+    their count to rest[0]; None (the default) computes every element. dt is the step's
+    duration, used only by a rate-dependent cap (relaxation time > 0; 0: elastic there).
     Returns -1, or the first element with a non-positive IP Jacobian or a failed material.
     """
     if sig.shape[1] != 4:
@@ -237,10 +238,10 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, 
             s = sig[e, ip]
             if has_state:
                 status, dwp, w, wth = _stress_point(p, s, mstate[e, ip], gxx, gxy, gyx, gyy,
-                                                    c, sn, dth, deps, sold, ebuf)
+                                                    c, sn, dth, deps, sold, ebuf, dt)
             else:
                 status, dwp, w, wth = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn,
-                                                    dth, deps, sold, ebuf)
+                                                    dth, deps, sold, ebuf, dt)
             if status != 0:
                 return e
             # Forces and work with the current gradients and volume

@@ -55,7 +55,7 @@ import math
 import numpy as np
 from numba import njit
 
-from pdfem.kernels.cap import _plastic_update
+from pdfem.kernels.cap import plastic_update
 from pdfem.kernels.cap_surface import yield_value
 from pdfem.kernels.elastic import elastic_increment
 from pdfem.kernels.element import thermal_row
@@ -138,7 +138,7 @@ def _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1, by2, by
 
 @njit(cache=True)
 def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1, f, ewint, ewp,
-                  eth):
+                  eth, dt=0.0):
     """One-point quads with total-form hourglass control (hg, with the stiffness hg_model:
     HG_COEFFICIENT, HG_BENDING, HG_FULL or HG_POINTS, module docstring) on elements [e0, e1).
 
@@ -147,6 +147,7 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
     plastic work to ewp. eth (ne, 3) couples temperature in (element.thermal_row; the
     thermal-strain work goes to eth[:, 2]); shape (0, 3) or None leaves it out, None in a
     version compiled without the thermal branches (the solver's call without coupling).
+    dt is the step's duration, used only by a rate-dependent cap (relaxation time > 0).
     Returns -1, or the first element with a non-positive (mid-step or current) area, a
     non-finite cap input, a failed cap return or an unknown material model.
     """
@@ -226,7 +227,7 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
             else:
                 # Outside: the plastic return from the rotated stress
                 s[0], s[1], s[2], s[3] = r0, r1, r2, r3
-                status, dwp = _plastic_update(p, s, st, d0, d1, d2, d3, over)
+                status, dwp = plastic_update(p, s, st, d0, d1, d2, d3, over, dt)
                 if status != 0:
                     return e
                 t0, t1, t2, t3 = s[0], s[1], s[2], s[3]

@@ -30,8 +30,9 @@ SOFT_FLOOR = 0.05
 
 
 @njit(cache=True)
-def material_update(p, sig, deps, st):
-    """Update stress sig (4,) in place for strain increment deps (4,) and state row st.
+def material_update(p, sig, deps, st, dt=0.0):
+    """Update stress sig (4,) in place for strain increment deps (4,) and state row st over a
+    step of duration dt (used only by a rate-dependent cap, p[CAP_TAU] > 0).
 
     Returns (status, dwp): status 0 on success or a negative code (see module docstring);
     dwp is the plastic work density increment [J/m^3]. The stress is left untouched when
@@ -43,7 +44,7 @@ def material_update(p, sig, deps, st):
         return MAT_OK, elastic_update(p, sig, deps, st)
     # Sandler-Rubin cap plasticity (state row of CAP_NST values)
     if model == CAP:
-        return cap_update(p, sig, deps, st)
+        return cap_update(p, sig, deps, st, dt)
     return MAT_UNKNOWN_MODEL, 0.0
 
 

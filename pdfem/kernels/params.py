@@ -26,6 +26,7 @@ CAP_W = 9  # maximum plastic volumetric compaction W [-]
 CAP_KAPPA0 = 10  # initial cap position kappa_0 (I1 where cap meets envelope) [Pa]
 CAP_T = 11  # tension cut-off on I1 (>= 0) [Pa]
 CAP_TOL = 12  # yield-surface tolerance (relative) [-]
+CAP_TAU = 13  # Duvaut-Lions relaxation time of the overstress; 0: rate-independent [s]
 
 # Heat
 ALPHA = 16  # linear thermal expansion coefficient [1/K]

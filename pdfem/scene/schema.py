@@ -125,6 +125,9 @@ CAP = {
     "tension_cutoff": _nonneg("float", Derived("ln(A/C)/B if B > 0 and C > 0, else 0"),
                               "tension cut-off on I1", "Pa"),
     "tol": _pos("float", 1e-8, "relative yield-surface tolerance of the return mapping"),
+    "relaxation_time": _nonneg("float", 0.0, "rate-dependent strength: Duvaut-Lions "
+                               "relaxation time of the stress outside the surface; 0: "
+                               "rate-independent", "s"),
 }
 
 # Model name -> the keys it adds to MATERIAL_COMMON

@@ -326,6 +326,19 @@ def test_analyse_synthetic(tmp_path):
     assert not list(tmp_path.glob("*.part"))
 
 
+def test_jump_figure_with_a_sweep(tmp_path):
+    """The jump-state figure takes a sweep's steady states (a stopped row, with no front, is
+    left out) and static curve."""
+    path = make_run(str(tmp_path / "run.h5"))
+    pts = [{"us": 2.5 * v, "rho1": 1700.0 + v, "sigma": 1240.0 * 1.5 * v * v}
+           for v in (100.0, 288.0)] + [{"us": None, "rho1": None, "sigma": None}]
+    static = {"density": list(np.linspace(1240.0, 1950.0, 20)),
+              "sigma_piston": list(np.linspace(0.0, 5e8, 20))}
+    analyse(path, str(tmp_path / "out"), sweep={"points": pts, "static": static})
+    data = (tmp_path / "out-hugoniot.png").read_bytes()
+    assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 1000
+
+
 def test_analyse_without_shock_table(tmp_path):
     """An older file without [shock]: InputError naming the file."""
     path = make_run(str(tmp_path / "old.h5"), shock=False, nframes=5)

@@ -217,6 +217,11 @@ def test_sweep_on_2_ranks(small_bed, tmp_path):
     assert st["floor"] < 2.0e7 and st["kinetic_over_work"] < 0.1
     assert 0.7 * 1900.0 < st["jamming_density"] < 1900.0
     assert (tmp_path / "sw.png").read_bytes()[:4] == b"\x89PNG"
+    # A run analysed again with the sweep's JSON read for its jump-state figure (the scene
+    # asks for no figures; tests/test_shock_analysis.py draws one)
+    p = pdfem(["analyse", "sw-v500.h5", "-p", "an", "--sweep", "sw.json"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    assert json.loads((tmp_path / "an-summary.json").read_text())["front"]["us"] == pts[1]["us"]
 
 
 @pytest.mark.parametrize("args,msg", [

@@ -1,4 +1,4 @@
-"""PNG figures of a shock run: snapshots, gauges, x-t diagram, Hugoniot, velocity sweep.
+"""PNG figures of a shock run: snapshots, gauges, x-t diagram, jump state, velocity sweep.
 
 Stresses are drawn compressive-positive (-sigma_yy) in MPa, times in microseconds and
 lengths in millimetres. Every figure is written atomically (``path.part`` then renamed).
@@ -124,22 +124,54 @@ def xt_plot(time, grain_y, y_f, fit, y_top0, hammer_y, anvil_y, path, y_p=None):
     _save(fig, path)
 
 
-def hugoniot_plot(ev, stress, path, snow=None, measured=None, decel=None):
-    """Bed stress vs volumetric strain; ``snow``/``measured``: (e_v, stress in Pa) points;
-    ``decel``: optional per-frame stress from a free hammer's deceleration."""
-    fig, ax = plt.subplots(figsize=(6.0, 4.6))
-    ax.plot(ev, stress * MPA, "C0.-", ms=3, lw=0.8, label="bed (mean of hammer and anvil)")
-    if decel is not None:
-        ax.plot(ev, decel * MPA, "C1-", lw=0.8, alpha=0.8, label="hammer deceleration m dv/dt")
-    if snow is not None and np.all(np.isfinite(snow)):
-        ax.plot(snow[0], snow[1] * MPA, "rs", ms=8, label="snowplow (measured up)")
-    if measured is not None and np.all(np.isfinite(measured)):
-        ax.plot(measured[0], measured[1] * MPA, "k^", ms=8, label="front window mean")
-    ax.set_xlabel("volumetric strain 1 - H/H0")
-    ax.set_ylabel("-sigma_yy [MPa] (compression > 0)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    _save(fig, path)
+def jump_plot(jump, path, sweep=None):
+    """The run's jump state in the stress-density plane, as a shock physicist reads it: the
+    measured state behind the front on its Rayleigh line sigma = rho0 Us^2 (1 - rho0/rho)
+    (shaded for Us within one standard error), the snowplow state at the measured up and its
+    full density, the bound of grains compressed by their own bulk response at each stress,
+    and, from a sweep's JSON (``sweep``: its ``points`` and ``static``), the sweep's steady
+    states and the static compression curve.
+
+    ``jump``: rho0, rho_s, us, us_se, up, rho1, sigma, snow_sigma, rho1_max and bound
+    (densities, stresses) of the bound curve, SI.
+    """
+    fig, ax = plt.subplots(figsize=(6.4, 4.8))
+    r0, rs, us, se = jump["rho0"], jump["rho_s"], jump["us"], jump["us_se"]
+    rho1, sig = jump["rho1"], jump["sigma"]
+    dens, stress = jump["bound"]
+    rho_hi = np.nanmax([rs, rho1, jump["rho1_max"]]) * 1.03
+    rho = np.linspace(r0, rho_hi, 200)
+    if np.isfinite(us):
+        # The Rayleigh line of the measured front, and its band for Us +- one standard error
+        ray = lambda u: r0 * u * u * (1.0 - r0 / rho) * MPA  # noqa: E731
+        ax.fill_between(rho, ray(max(us - se, 0.0)), ray(us + se), color="C0", alpha=0.15,
+                        lw=0)
+        ax.plot(rho, ray(us), "C0-", lw=1.2, label=f"Rayleigh line, Us = {us:.0f} m/s")
+    if np.isfinite(rho1) and np.isfinite(sig):
+        ax.plot([rho1], [sig * MPA], "ko", ms=7, label="jump state behind the front")
+    ax.axvline(rs, color="r", lw=0.8, ls="--", label="every pore closed, rigid grains")
+    if np.isfinite(jump["snow_sigma"]):
+        ax.plot([rs], [jump["snow_sigma"] * MPA], "rs", ms=7,
+                label=f"snowplow state at up = {jump['up']:.0f} m/s")
+    ax.plot(dens, stress * MPA, "C2-", lw=1.2,
+            label="bound: grains at their own compression")
+    top = [sig, jump["snow_sigma"]]
+    if sweep is not None:
+        pts = [p for p in sweep.get("points", [])
+               if all(p.get(k) is not None and np.isfinite(p[k]) for k in ("us", "rho1", "sigma"))]
+        if pts:
+            ax.plot([p["rho1"] for p in pts], [p["sigma"] * MPA for p in pts], "C1D", ms=5,
+                    mfc="none", label="sweep: steady fronts")
+            top += [p["sigma"] for p in pts]
+        st = sweep.get("static")
+        if st:
+            ax.plot(st["density"], np.asarray(st["sigma_piston"]) * MPA, "C4-", lw=1.0,
+                    label="static compression (piston)")
+    ax.set_xlim(0.95 * r0, rho_hi)
+    ax.set_ylim(0.0, 1.6 * np.nanmax(np.append(np.asarray(top, float), 1.0)) * MPA)
+    ax.set_xlabel("density [kg/m^3]")
+    ax.set_ylabel("stress [MPa] (compression > 0)")
+    _save(fig, path, (ax,))
 
 
 def sweep_plot(points, path, static=None):

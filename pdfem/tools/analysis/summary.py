@@ -240,8 +240,6 @@ def compute(run):
                      "crystal": sh.get("crystal_hugoniot")},
         "notes": list(run.notes),
     }
-    hug["stress_deceleration"] = None if run.drive["driven"] else fr.deceleration_stress(
-        t, run.hammer_mean_vy, run.hammer_mass, run.width)
     arrays = {"time": t, "y_f": fp["y_f"], "y_p": pp["y_f"], "y_line": y_line, "fit": fit,
               "precursor_fit": pfit, "geo": geo, "hugoniot": hug, "compaction": comp["strain"]}
     return summary, arrays
@@ -365,11 +363,12 @@ def report_text(s):
     return "\n".join(lines) + "\n"
 
 
-def _figures(run, s, arrays, prefix):
-    """Draw the four figures of a run next to ``prefix``."""
+def _figures(run, s, arrays, prefix, sweep=None):
+    """Draw the four figures of a run next to ``prefix`` (``sweep``: a sweep's JSON, whose
+    points and static curve join the jump-state figure)."""
     from pdfem.tools.analysis import plots
 
-    t, fit, hug = arrays["time"], arrays["fit"], arrays["hugoniot"]
+    t, fit = arrays["time"], arrays["fit"]
     sh = run.shock
     # Snapshots: five frames from the first impact to the end
     if run.has_stress:
@@ -384,15 +383,30 @@ def _figures(run, s, arrays, prefix):
                       run.gauges[sh["anvil_gauge"]], prefix + "-gauges.png", width=run.width)
     plots.xt_plot(t, run.grain_y, arrays["y_f"], fit, arrays["geo"]["y_top0"], run.hammer_y,
                   run.anvil_y, prefix + "-xt.png", y_p=arrays["y_p"])
-    b, sn, h = s["bed"], s["snowplow"], s["shocked"]
-    rho0, rho1 = b["rho0"], h["rho1"]
-    plots.hugoniot_plot(hug["ev"], hug["stress"], prefix + "-hugoniot.png",
-                        decel=hug["stress_deceleration"],
-                        snow=(1.0 - rho0 / b["solid_density"], sn["sigma"]),
-                        measured=(1.0 - rho0 / rho1 if rho1 > 0 else NAN, h["sigma"]))
+    plots.jump_plot(jump_state(run, s, sweep), prefix + "-hugoniot.png", sweep=sweep)
 
 
-def analyse(run_path, prefix, extra=None):
+def jump_state(run, s, sweep=None):
+    """What :func:`pdfem.tools.analysis.plots.jump_plot` draws of a summary ``s``: the
+    measured jump state, the snowplow's, and the bound curve (:func:`front.compacted_density`
+    of the grains' material) up to twice the largest stress shown."""
+    b, h, f = s["bed"], s["shocked"], s["front"]
+    sigmas = [h["sigma"], s["snowplow"]["sigma"]]
+    if sweep is not None:
+        sigmas += [p["sigma"] for p in sweep.get("points", []) if p.get("sigma") is not None]
+    top = 2.0 * max([q for q in sigmas if q is not None and math.isfinite(q)] + [1.0e6])
+    grid = np.linspace(0.0, top, 120)
+    mat = run.scene["materials"][run.grain_material]
+    dens = np.array([fr.compacted_density(q, b["solid_density"], mat) for q in grid])
+    us = f["us"] if f["us"] is not None else NAN
+    se = f["se"] if f["se"] is not None and math.isfinite(f["se"]) else 0.0
+    return {"rho0": b["rho0"], "rho_s": b["solid_density"], "us": us, "us_se": se,
+            "up": h["up"], "rho1": h["rho1"],
+            "sigma": h["sigma"], "snow_sigma": s["snowplow"]["sigma"],
+            "rho1_max": s["bound"]["rho1_max"], "bound": (dens, grid)}
+
+
+def analyse(run_path, prefix, extra=None, sweep=None):
     """Analyse the shock run at ``run_path``; write ``<prefix>-summary.json``/``.txt`` and the
     figures (with ``[shock].plots = "png"``); return the summary dict.
 
@@ -410,7 +424,7 @@ def analyse(run_path, prefix, extra=None):
     _write(prefix + "-summary.json", json.dumps(plain, indent=1) + "\n")
     _write(prefix + "-summary.txt", report_text(plain))
     if plots == "png":
-        _figures(run, summary, arrays, prefix)
+        _figures(run, summary, arrays, prefix, sweep)
     return {**summary, "arrays": arrays}
 
 

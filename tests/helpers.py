@@ -46,6 +46,18 @@ def datasets(path):
     return out
 
 
+def same_results(path_a, path_b):
+    """Assert that two run files hold the same datasets, bit for bit, but for the resolved
+    scene (runs of scenes that differ in a key that must not change a result); return the
+    first file's datasets."""
+    a, b = datasets(path_a), datasets(path_b)
+    assert a.keys() == b.keys()
+    for k in a:
+        if k != "scene":
+            assert np.array_equal(a[k], b[k]), k
+    return a
+
+
 def sigterm_when(args, cwd, part):
     """Run ``python -m pdfem args`` in ``cwd`` (1 process), send it SIGTERM 0.2 s after the
     file ``part`` appears (within 120 s), and return (exit status, stdout, stderr)."""

@@ -316,15 +316,11 @@ def frame_means(time, gauge_time, series):
     return np.where(b > a, m, np.interp(time, gt, gs))
 
 
-def deceleration_stress(time, hammer_vy, hammer_mass, width, frames=None):
-    """Face stress from the hammer's momentum: (m/W) dv_y/dt, compressive-positive.
-
-    With ``frames``, the least-squares slope over those frames (a float); otherwise per frame
-    (an array, central differences). Independent of the ringing of a thin hammer's gauge.
+def deceleration_stress(time, hammer_vy, hammer_mass, width, frames):
+    """Face stress from the hammer's momentum: (m/W) dv_y/dt, compressive-positive, the
+    least-squares slope over ``frames`` (NaN with fewer than two). Independent of the ringing
+    of a thin hammer's gauge.
     """
-    if frames is None:
-        return hammer_mass / width * np.gradient(hammer_vy, time) if len(time) > 1 else \
-            np.full(len(time), NAN)
     if len(frames) < 2:
         return NAN
     return float(hammer_mass / width * np.polyfit(time[frames], hammer_vy[frames], 1)[0])

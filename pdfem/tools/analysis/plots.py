@@ -141,9 +141,12 @@ def jump_plot(jump, path, sweep=None):
     dens, stress = jump["bound"]
     rho_hi = np.nanmax([rs, rho1, jump["rho1_max"]]) * 1.03
     rho = np.linspace(r0, rho_hi, 200)
+    def ray(u):
+        """The Rayleigh line of a front of speed u from the bed at rest [MPa]."""
+        return r0 * u * u * (1.0 - r0 / rho) * MPA
+
     if np.isfinite(us):
         # The Rayleigh line of the measured front, and its band for Us +- one standard error
-        ray = lambda u: r0 * u * u * (1.0 - r0 / rho) * MPA  # noqa: E731
         ax.fill_between(rho, ray(max(us - se, 0.0)), ray(us + se), color="C0", alpha=0.15,
                         lw=0)
         ax.plot(rho, ray(us), "C0-", lw=1.2, label=f"Rayleigh line, Us = {us:.0f} m/s")

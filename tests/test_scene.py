@@ -531,3 +531,24 @@ def test_restart_scene_comparison_takes_keys_added_since_at_their_default():
                  {"materials": {"g": dict(new["materials"]["g"], eos="us_up", eos_s=2.0)}}):
         with pytest.raises(InputError, match="was written for a different scene"):
             same_scene("c.h5", dumps(old), dumps({**new, **edit}))
+
+
+def test_the_crystal_hugoniot_is_the_grain_materials_own():
+    """[shock] crystal_hugoniot: derived from a grain material with eos = "us_up" (and then
+    refused when typed again), as given for grains without an equation of state."""
+    from tests.scenes import inline_shock
+
+    sc = load_scene(Path(__file__).resolve().parents[1] / "pdfem" / "scenes" / "shot912.toml")
+    hmx = sc.resolved["materials"]["hmx"]
+    assert sc.resolved["shock"]["crystal_hugoniot"] == [
+        math.sqrt(hmx["bulk"] / hmx["density"]), hmx["eos_s"]]
+    doc = inline_shock()
+    assert "crystal_hugoniot" not in parse_scene(doc, ".").resolved["shock"]
+    doc["shock"]["crystal_hugoniot"] = [2770.0, 2.29]
+    assert parse_scene(doc, ".").resolved["shock"]["crystal_hugoniot"] == [2770.0, 2.29]
+    doc["materials"]["hmx"].update(eos="us_up", eos_s=2.0)
+    with pytest.raises(InputError, match="shock.crystal_hugoniot: derived from materials.hmx"):
+        parse_scene(doc, ".")
+    del doc["shock"]["crystal_hugoniot"]
+    c0 = math.sqrt(doc["materials"]["hmx"]["bulk"] / doc["materials"]["hmx"]["density"])
+    assert parse_scene(doc, ".").resolved["shock"]["crystal_hugoniot"] == [c0, 2.0]

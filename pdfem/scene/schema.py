@@ -275,8 +275,11 @@ SHOCK = {
     "steady_tolerance": _pos("float", 0.1, "a front is steady when its speeds over 15-50 % and "
                              "50-85 % of the bed height differ by at most this fraction of the "
                              "speed over 15-85 %; an unsteady front is reported, not fitted"),
-    "crystal_hugoniot": Key("vec2", OPTIONAL, "[c0, s] of the grain crystal's Hugoniot Us = c0 "
-                            "+ s up, drawn beside the bed's (sweep)", "[m/s, 1]"),
+    "crystal_hugoniot": Key("vec2", Derived("the grain material's own when its eos is "
+                                            "\"us_up\": [sqrt(bulk/density), eos_s]"),
+                            "[c0, s] of the grain crystal's Hugoniot Us = c0 + s up, drawn "
+                            "beside the bed's (sweep, jump figure); given only for grains "
+                            "without an equation of state", "[m/s, 1]"),
     "plots": Key("str", "png", "write the figures (PNG, matplotlib) or not",
                  choices=("png", "none")),
     "reference_us": _pos("float", 500.0, "front speed reported by the 1997 study (printed "

@@ -450,8 +450,28 @@ def _gauges(value, blocks):
     return out
 
 
+def crystal_hugoniot(material):
+    """[c0, s] of the Hugoniot Us = c0 + s up that a material table with eos = "us_up"
+    simulates (c0 = sqrt(bulk / density)); None for any other bulk response."""
+    if material.get("eos") != "us_up":
+        return None
+    return [math.sqrt(material["bulk"] / material["density"]), material["eos_s"]]
+
+
+def _crystal_hugoniot(sh, mat, materials):
+    """shock.crystal_hugoniot: the grain material's own when it has an equation of state
+    (then the key may not be typed again), else the key as given (or absent)."""
+    own = crystal_hugoniot(materials[mat]) if mat is not None else None
+    if own is None:
+        return
+    if "crystal_hugoniot" in sh:
+        raise SceneError("shock.crystal_hugoniot", f"derived from materials.{mat} (eos = "
+                         f"\"us_up\": [{own[0]:.6g}, {own[1]:.6g}]); remove the key")
+    sh["crystal_hugoniot"] = own
+
+
 def _shock(value, r):
-    """[shock]: blocks and gauges that exist; the solid density."""
+    """[shock]: blocks and gauges that exist; the solid density and the crystal's Hugoniot."""
     sh = check_table(value, S.SHOCK, "shock")
     names = [b["name"] for b in r["blocks"]]
     for key in ("hammer", "anvil"):
@@ -461,13 +481,14 @@ def _shock(value, r):
         if sh[key] not in gauges:
             raise SceneError(f"shock.{key}", f"unknown gauge {show(sh[key])} (known: "
                              f"{', '.join(gauges) or 'no gauges'})")
+    mat = r.get("grains_file", {}).get("material") or (r["grains"][0]["material"]
+                                                       if r["grains"] else None)
     if "solid_density" not in sh:
-        mat = r.get("grains_file", {}).get("material") or (r["grains"][0]["material"]
-                                                           if r["grains"] else None)
         if mat is None:
             raise SceneError("shock.solid_density", "required when no grain material is "
                              "named (grains_file.material or grains[0].material)")
         sh["solid_density"] = r["materials"][mat]["density"]
+    _crystal_hugoniot(sh, mat, r["materials"])
     if not sh["precursor_fraction"] < sh["front_fraction"]:
         raise SceneError("shock.precursor_fraction", f"must be below front_fraction "
                          f"{sh['front_fraction']!r} (got {sh['precursor_fraction']!r})")

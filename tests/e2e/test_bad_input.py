@@ -52,6 +52,13 @@ def _prep(edit):
     return toml(doc)
 
 
+def _shock_with(edit):
+    """The TOML text of inline_shock() changed by ``edit(doc)``."""
+    doc = inline_shock()
+    edit(doc)
+    return toml(doc)
+
+
 # Input files written once for all cases
 FILES = {
     "good.toml": toml(checkpointed_grains()),
@@ -61,6 +68,9 @@ FILES = {
     "typo.toml": _prep(lambda d: d["materials"]["hmx"].update(specfic_heat=1.0)),
     "fields.toml": toml(every_field_shock()),
     "shock.toml": toml(inline_shock()),
+    "hugoniot_twice.toml": _shock_with(lambda d: (
+        d["materials"]["hmx"].update(eos="us_up", eos_s=2.29),
+        d["shock"].update(crystal_hugoniot=[2770.0, 2.29]))),
     "negative.toml": _good(lambda d: d["domain"].update(cell_size=-1.0e-3)),
     "zero.toml": _good(lambda d: _grain_axes(d, [0.0, 3.0e-4])),
     "nan.toml": _good(lambda d: d["time"].update(end=float("nan"))),
@@ -210,6 +220,8 @@ CASES = {
     "run HDF5 as scene": (["run", "good.h5"], "good.h5: cannot read the scene file"),
     "run negative size": (["run", "negative.toml"], "domain.cell_size: must be >= 0"),
     "run zero size": (["run", "zero.toml"], "grains[0].axes[0]: must be > 0"),
+    "run hugoniot typed twice": (["run", "hugoniot_twice.toml"],
+                                 "shock.crystal_hugoniot: derived from materials.hmx"),
     "run nan": (["run", "nan.toml"], "time.end: must be finite"),
     "run eos without slope": (["run", "eos_no_s.toml"],
                               'materials.grain.eos_s: required with eos = "us_up"'),

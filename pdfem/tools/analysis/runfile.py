@@ -16,6 +16,7 @@ import numpy as np
 from pdfem.errors import InputError
 from pdfem.io.runcheck import check_run_file
 from pdfem.mesh.quality import folded_area
+from pdfem.scene.validate import crystal_hugoniot
 from pdfem.tools.analysis.escape import contact_reach, escaped_mass
 
 # Values of the [shock] keys when an older resolved scene lacks them
@@ -216,6 +217,8 @@ def _read(f, path, scene, shock):
     garea = np.bincount(elem_body, weights=element_areas(x0, conn), minlength=len(kind))[:ng]
     gmat = mats[int(np.bincount(elem_mat[elem_body < ng]).argmax())]
     shock.setdefault("solid_density", float(scene["materials"][gmat]["density"]))
+    if "crystal_hugoniot" not in shock:
+        shock["crystal_hugoniot"] = crystal_hugoniot(scene["materials"][gmat])
     hammer, _, hall = _block_rows(scene, ng, node_body, shock["hammer"], path)
     _, anvil, _ = _block_rows(scene, ng, node_body, shock["anvil"], path)
     gsel = elem_body < ng

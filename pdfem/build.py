@@ -32,6 +32,7 @@ def material_table(materials):
         table[i, P.SHEAR] = tbl["shear"]
         if tbl.get("eos") == "us_up":
             table[i, P.EOS_S] = tbl["eos_s"]
+            table[i, P.EOS_G] = tbl.get("eos_gamma", 0.0)
         for key, col in CAP_KEYS.items():
             if key in tbl:
                 table[i, col] = tbl[key]
@@ -39,7 +40,9 @@ def material_table(materials):
 
 
 def check_materials(materials, table):
-    """Check model parameters the schema cannot; return the material state size per point."""
+    """Check model parameters the schema cannot; return the material state size per point:
+    the cap's CAP_NST values where a material is a cap, then one more, the last, where a
+    material has a Gruneisen coefficient (its points' internal energy, pdfem.kernels.eos)."""
     nst = 0
     for i, name in enumerate(materials):
         if int(table[i, P.MODEL]) == P.CAP:
@@ -47,6 +50,8 @@ def check_materials(materials, table):
             if why:
                 raise InputError(f"materials.{name}: {why}")
             nst = CAP_NST
+    if np.any(table[:, P.EOS_G] > 0.0):
+        nst += 1
     return nst
 
 

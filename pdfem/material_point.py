@@ -39,7 +39,7 @@ CAP_OPTIONAL = ("tension_cutoff", "tol", "relaxation_time")
 # Keys a scene's cap material may hold that this isothermal driver does not use (thermal and
 # temperature-dependence keys): the scene schema's keys of the cap model less the ones above
 # The equation of state's keys, which the driver applies (pdfem.kernels.eos)
-EOS_KEYS = ("eos", "eos_s")
+EOS_KEYS = ("eos", "eos_s", "eos_gamma")
 IGNORED_KEYS = tuple(k for k in (*S.MATERIAL_COMMON, *S.CAP)
                      if k != "model" and k not in CAP_KEYS and k not in EOS_KEYS)
 
@@ -117,6 +117,9 @@ def _eos_into(tbl, where, p):
         p[P.EOS_S] = _number(tbl, "eos_s", where)
         if not 0.0 < p[P.EOS_S] <= 10.0:
             raise InputError(f"{where}.eos_s: must be in (0, 10] (got {p[P.EOS_S]:g})")
+    if tbl.get("eos_gamma", 0.0) != 0.0:
+        raise InputError(f"{where}.eos_gamma: the material-point driver keeps no internal "
+                         "energy; it drives the Hugoniot alone (eos_gamma = 0)")
 
 
 def named_path(name, strain=-0.01, axial=None):

@@ -36,6 +36,7 @@ from pdfem.kernels.element_1pt import (
     q4_forces_1pt,
 )
 from pdfem.kernels.integrate import NACC, advance_positions, advance_velocities, moves_half_skin
+from pdfem.kernels.params import EOS_G
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
 from pdfem.mesh.quality import corner_jacobians
@@ -97,6 +98,9 @@ class Simulation:
         self.halo_fields = ["x", "v"] + [n for e in self.effects for n in e.halo_fields]
         # Element temperatures exist (store field eth) when heat couples into the elements
         self.coupled = any(f.name == "eth" for f in self.fields)
+        # A Mie-Gruneisen material is heated by the bulk viscosity (its elements' qv)
+        self.heats_eos = (bool(np.any(self.mat_params[:, EOS_G] > 0.0))
+                          and any(f.name == "qv" for f in self.fields))
         # Without it the 1-point kernel takes None (compiled without the thermal branches)
         self.no_eth = None if el["rule"] == "1pt" else NO_ETH
         dom, tm = r["domain"], r["time"]
@@ -314,7 +318,10 @@ class Simulation:
             args = (s.x, self.du, s.conn, s.emat, self.mat_params, s.sig, s.mst, s.hourglass,
                     self.hg_model, 0, s.ne_own, self.f, s.ewint, s.ewp,
                     s.eth if self.coupled else self.no_eth)
-            if self.nip == 1:
+            if self.heats_eos:
+                bad = (self.element_kernel(*args, st.dt, s.qv) if self.nip == 1 else
+                       self.element_kernel(*args, None, st.dt, s.qv))
+            elif self.nip == 1:
                 bad = self.element_kernel(*args, st.dt)
             elif self.rest is None:
                 bad = self.element_kernel(*args, None, st.dt)

@@ -20,9 +20,9 @@ there, leaving that element partly updated (the run must then abort).
 import numpy as np
 from numba import njit
 
-from pdfem.kernels.eos import eos_row
+from pdfem.kernels.eos import eos_row, gruneisen_heat, gruneisen_row
 from pdfem.kernels.material import material_update, softened
-from pdfem.kernels.params import ALPHA, EOS_S, SOFT_K, SOFT_Y
+from pdfem.kernels.params import ALPHA, EOS_G, EOS_S, SOFT_K, SOFT_Y
 
 GP = 0.5773502691896257  # 1/sqrt(3), 2x2 Gauss abscissa
 XI = np.array([-1.0, 1.0, 1.0, -1.0])  # natural coordinates of the nodes
@@ -109,14 +109,16 @@ def _grad(ue, dx, dy):
 
 
 @njit(cache=True)
-def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold, ebuf, dt):
+def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold, ebuf, dt, q=0.0):
     """Objective update of one point stress s (4,).
 
     (gxx, gxy, gyx, gyy) is the mid-step gradient of du, (c, sn) the Cayley rotation of its
     skew part, dth the isotropic thermal strain increment (removed from the material's
     strain, sigma_zz included); ebuf receives the row of a material with an equation of
-    state (eos.eos_row); dt is the step's duration (a rate-dependent cap's). Returns
-    (status, dwp, mechanical work density, thermal-strain work density sigma:deps_th).
+    state (eos.eos_row, eos.gruneisen_row); dt is the step's duration (a rate-dependent
+    cap's); q the bulk viscosity of the element (heats a Mie-Gruneisen point, whose energy
+    is the last value of st). Returns (status, dwp, mechanical work density, thermal-strain
+    work density sigma:deps_th).
     """
     # Rotate the stress, Q sig Q^T with Q = [[c, sn], [-sn, c]]
     sxx = s[0]
@@ -132,12 +134,21 @@ def _stress_point(p, s, st, gxx, gxy, gyx, gyy, c, sn, dth, deps, sold, ebuf, dt
     deps[3] = -dth
     for k in range(4):
         sold[k] = s[k]
+    dv = deps[0] + deps[1] + deps[3]
+    jmid = 1.0
+    dq = 0.0
     if p[EOS_S] > 0.0:
-        p = eos_row(p, s[0], s[1], s[3], deps[0] + deps[1] + deps[3], ebuf)
+        if p[EOS_G] > 0.0:
+            p, jmid, dq = gruneisen_row(p, s[0], s[1], s[3], dv, st[st.shape[0] - 1], q, ebuf)
+        else:
+            p = eos_row(p, s[0], s[1], s[3], dv, ebuf)
     status, dwp = material_update(p, s, deps, st, dt)
     # Stress power density, trapezoidal in time
     w = 0.5 * ((sold[0] + s[0]) * deps[0] + (sold[1] + s[1]) * deps[1]
                + 2.0 * (sold[2] + s[2]) * deps[2] + (sold[3] + s[3]) * deps[3])
+    # A Mie-Gruneisen point: the step's energy, the deviatoric work's pressure
+    if p[EOS_G] > 0.0 and status == 0:
+        gruneisen_heat(p, s, (sold[0] + sold[1] + sold[3]) / 3.0, w, dv, jmid, dq, st)
     wth = 0.5 * dth * (sold[0] + s[0] + sold[1] + s[1] + sold[3] + s[3])
     return status, dwp, w, wth
 
@@ -190,7 +201,7 @@ def unloaded_at_rest(du, conn, sig, eth, e, has_th):
 
 @njit(cache=True)
 def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, e1,
-                  f, ewint, ewp, eth, rest=None, dt=0.0):
+                  f, ewint, ewp, eth, rest=None, dt=0.0, qv=None):
     """Fully integrated (2x2 Gauss) quads on elements [e0, e1); hg and hg_model are ignored.
 
     Updates sig (ne,4,4) and mstate per point; subtracts internal forces from f element by
@@ -199,6 +210,8 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, 
     rest, an int64 array (1,), skips the elements unloaded at rest (unloaded_at_rest) and adds
     their count to rest[0]; None (the default) computes every element. dt is the step's
     duration, used only by a rate-dependent cap (relaxation time > 0; 0: elastic there).
+    qv (ne,), the elements' bulk viscosity of the last step, heats the points of a material
+    with a Gruneisen coefficient; None or shape (0,): no viscosity.
     Returns -1, or the first element with a non-positive IP Jacobian or a failed material.
     """
     if sig.shape[1] != 4:
@@ -223,6 +236,10 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, 
             rest[0] += 1
             continue
         p, dth = thermal_row(mat_params[emat[e]], eth, e, has_th, pbuf)
+        q = 0.0
+        if qv is not None:
+            if qv.shape[0] > 0:
+                q = qv[e]
         _gather(x, du, conn, e, xc, xm, ue)
         for i in range(4):
             fe[i, 0] = 0.0
@@ -238,7 +255,7 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, 
             s = sig[e, ip]
             if has_state:
                 status, dwp, w, wth = _stress_point(p, s, mstate[e, ip], gxx, gxy, gyx, gyy,
-                                                    c, sn, dth, deps, sold, ebuf, dt)
+                                                    c, sn, dth, deps, sold, ebuf, dt, q)
             else:
                 status, dwp, w, wth = _stress_point(p, s, nost, gxx, gxy, gyx, gyy, c, sn,
                                                     dth, deps, sold, ebuf, dt)

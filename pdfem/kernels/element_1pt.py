@@ -59,9 +59,9 @@ from pdfem.kernels.cap import plastic_update
 from pdfem.kernels.cap_surface import yield_value
 from pdfem.kernels.elastic import elastic_increment
 from pdfem.kernels.element import thermal_row
-from pdfem.kernels.eos import eos_row
+from pdfem.kernels.eos import eos_row, gruneisen_heat, gruneisen_row
 from pdfem.kernels.hourglass_points import points_eval, start_data
-from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_S, MODEL, SHEAR
+from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_G, EOS_S, MODEL, SHEAR
 
 # Columns of an element's hourglass reference: gamma_0..3, hg_coef A0 (b0.b0), A0; with the
 # points stiffness also the starting offsets of corners 1-3 from corner 0 (x1, y1, x2, y2, x3, y3)
@@ -138,7 +138,7 @@ def _gamma(x0, y0, x1, y1, x2, y2, x3, y3, bx0, bx1, bx2, bx3, by0, by1, by2, by
 
 @njit(cache=True)
 def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1, f, ewint, ewp,
-                  eth, dt=0.0):
+                  eth, dt=0.0, qv=None):
     """One-point quads with total-form hourglass control (hg, with the stiffness hg_model:
     HG_COEFFICIENT, HG_BENDING, HG_FULL or HG_POINTS, module docstring) on elements [e0, e1).
 
@@ -148,6 +148,8 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
     thermal-strain work goes to eth[:, 2]); shape (0, 3) or None leaves it out, None in a
     version compiled without the thermal branches (the solver's call without coupling).
     dt is the step's duration, used only by a rate-dependent cap (relaxation time > 0).
+    qv (ne,), the elements' bulk viscosity of the last step, heats the points of a material
+    with a Gruneisen coefficient (element.q4_forces_2x2); None or shape (0,): no viscosity.
     Returns -1, or the first element with a non-positive (mid-step or current) area, a
     non-finite cap input, a failed cap return or an unknown material model.
     """
@@ -203,8 +205,19 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
         r3 = s[3]
         d0, d1, d2, d3 = gxx - dth, gyy - dth, 0.5 * (gxy + gyx), -dth
         # A material with an equation of state: its bulk modulus over the step
+        jmid = 1.0
+        dq = 0.0
         if p[EOS_S] > 0.0:
-            p = eos_row(p, r0, r1, r3, d0 + d1 + d3, ebuf)
+            if p[EOS_G] > 0.0:
+                q = 0.0
+                if qv is not None:
+                    if qv.shape[0] > 0:
+                        q = qv[e]
+                ste = mst[e, 0]
+                p, jmid, dq = gruneisen_row(p, r0, r1, r3, d0 + d1 + d3, ste[ste.shape[0] - 1],
+                                            q, ebuf)
+            else:
+                p = eos_row(p, r0, r1, r3, d0 + d1 + d3, ebuf)
         dwp = 0.0
         model = int(p[MODEL])
         if model == CAP:
@@ -238,6 +251,10 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
         else:
             return e
         wk = 0.5 * ((r0 + t0) * d0 + (r1 + t1) * d1 + 2.0 * (r2 + t2) * d2 + (r3 + t3) * d3)
+        # A Mie-Gruneisen point: the step's energy, the deviatoric work's pressure
+        if p[EOS_G] > 0.0:
+            gruneisen_heat(p, s, (r0 + r1 + r3) / 3.0, wk, d0 + d1 + d3, jmid, dq, mst[e, 0])
+            t0, t1, t3 = s[0], s[1], s[3]
         wth = 0.5 * dth * (r0 + t0 + r1 + t1 + r3 + t3)
         # Current geometry: area and gradients for the forces
         a, bx0, bx1, bx2, bx3, by0, by1, by2, by3 = _mean_gradient(x0, y0, x1, y1, x2, y2,

@@ -18,13 +18,32 @@ shock's jump state lies on the Hugoniot. In tension (p <= 0) p_H is linear in et
 stops at eta = ETA_MAX / s (the pressure there stops the run through the stable step). K0 is
 the material's ``bulk`` (after any temperature softening), s its ``eos_s``. Sign convention:
 tension positive, p = -tr(sigma)/3 (sigma_zz included, plane strain).
+
+With a Gruneisen coefficient Gamma0 = ``eos_gamma`` > 0 the pressure is Mie-Gruneisen on that
+Hugoniot with Gamma rho = Gamma0 rho0:
+
+    p = p_H(eta) + Gamma0 (e - e_H(eta)) = p_r(eta) + Gamma0 e,   e_H = p_H eta / 2,
+    p_r(eta) = p_H(eta) (1 - Gamma0 eta / 2),
+
+e the point's internal energy per unit reference volume (the last column of its state row),
+from the rest state. The state is (stress, e): p - Gamma0 e = p_r(eta) gives eta in closed
+form (reference_eta, the root of a quadratic; p_r rises with eta for Gamma0 < 2 s). A step
+moves eta as above and adds to e the pressure's trapezoidal work, the bulk viscosity's work
+q (-dv) and the deviatoric stress work, each per reference volume (times J = 1 - eta at
+mid-step). The secant modulus takes the step to the Mie-Gruneisen pressure of eta_{n+1} with
+the first two (gruneisen_row); the deviatoric work, known only after the material's update,
+raises the pressure at constant volume by Gamma0 J w_dev (gruneisen_heat). A purely
+volumetric step without viscosity therefore ends on the isentrope of the form, a closed cycle
+returns e and p to their start to second order in the step, and a steady shock, whose
+dissipation the viscosity carries, ends on the Hugoniot: the reference curve is the Hugoniot,
+so its states are the form's.
 """
 
 import math
 
 from numba import njit
 
-from pdfem.kernels.params import BULK, EOS_S, RHO, SHEAR
+from pdfem.kernels.params import BULK, EOS_G, EOS_S, RHO, SHEAR
 
 # A step never compresses a point past this fraction of the limit eta = 1/s: the pressure
 # there, about 10^6 K0, stops the run through the stable step
@@ -85,6 +104,65 @@ def eos_row(p, s0, s1, s3, dv, out):
     else:
         out[BULK] = hugoniot_bulk(k0, s, pn)
     return out
+
+
+@njit(cache=True)
+def reference_eta(k0, s, g, pr):
+    """The compression at which p_r(eta) = p_H(eta) (1 - g eta / 2) equals pr (module
+    docstring; g = Gamma0 < 2 s): the root below 1/s of p_r(eta) = pr, in the form without
+    cancellation. g = 0 gives hugoniot_eta."""
+    if not pr > 0.0:
+        # Tension: K0 eta (1 - g eta / 2) = pr
+        return 2.0 * pr / (k0 + math.sqrt(k0 * k0 - 2.0 * g * k0 * pr))
+    # Compression: (pr s^2 + K0 g / 2) eta^2 - (K0 + 2 pr s) eta + pr = 0
+    return 2.0 * pr / (k0 + 2.0 * s * pr + math.sqrt(k0 * (k0 + 2.0 * pr * (2.0 * s - g))))
+
+
+@njit(cache=True)
+def gruneisen_row(p, s0, s1, s3, dv, e, q, out):
+    """The parameter row ``out`` for a step of volumetric strain increment dv of a point with
+    the Mie-Gruneisen form (module docstring): normal stresses (s0, s1, s3), internal energy
+    e per reference volume, bulk viscosity q >= 0 of its element. Returns (out, J, dq): the
+    secant bulk modulus that takes a volumetric step to the form's pressure at eta_{n+1} with
+    the pressure's and the viscosity's work, J = 1 - eta at mid-step, and the viscosity's work
+    per reference volume dq = J q max(-dv, 0)."""
+    k0 = p[BULK]
+    s = p[EOS_S]
+    g = p[EOS_G]
+    pn = -(s0 + s1 + s3) / 3.0
+    for i in range(p.shape[0]):
+        out[i] = p[i]
+    # The compression the state belongs to, moved by the step
+    eta_n = reference_eta(k0, s, g, pn - g * e)
+    eta = min(1.0 - (1.0 - eta_n) * math.exp(dv), ETA_MAX / s)
+    deta = eta - eta_n
+    jmid = 1.0 - 0.5 * (eta_n + eta)
+    dq = jmid * q * max(-dv, 0.0)
+    # p_{n+1} = p_r(eta) + g (e + (p_n + p_{n+1}) deta / 2 + dq), solved for p_{n+1}
+    pe = (hugoniot_pressure(k0, s, eta) * (1.0 - 0.5 * g * eta)
+          + g * (e + 0.5 * pn * deta + dq)) / (1.0 - 0.5 * g * deta)
+    if pe - pn != 0.0 and dv != 0.0:
+        out[BULK] = (pn - pe) / dv
+    else:
+        out[BULK] = hugoniot_bulk(k0, s, pn)
+    return out, jmid, dq
+
+
+@njit(cache=True)
+def gruneisen_heat(p, s, m_old, w, dv, jmid, dq, st):
+    """After the material's update of a point with the Mie-Gruneisen form: the step's energy,
+    J w + dq (w the trapezoidal stress work per current volume, dq the viscosity's from
+    gruneisen_row), into the last column of the state row st, and the pressure rise of the
+    deviatoric part of w at constant volume, Gamma0 J w_dev, onto the stress s (4,) whose mean
+    stress before the step was m_old. Returns that rise [Pa]."""
+    m_new = (s[0] + s[1] + s[3]) / 3.0
+    wdev = w - 0.5 * (m_old + m_new) * dv
+    st[st.shape[0] - 1] += jmid * w + dq
+    dp = p[EOS_G] * jmid * wdev
+    s[0] -= dp
+    s[1] -= dp
+    s[3] -= dp
+    return dp
 
 
 @njit(cache=True)

@@ -39,3 +39,4 @@ SOFT_Y = 22  # strength softening per kelvin (scales A, C) [1/K]
 
 # Equation of state (pdfem.kernels.eos)
 EOS_S = 23  # slope s of the linear Us-up Hugoniot of the bulk response; 0: linear bulk [-]
+EOS_G = 24  # Gruneisen coefficient Gamma0 (Gamma rho = Gamma0 rho0) on that Hugoniot; 0: none [-]

@@ -97,6 +97,9 @@ MATERIAL_COMMON = {
                choices=("linear", "us_up")),
     "eos_s": Key("float", OPTIONAL, "slope s of the Hugoniot (required by eos = \"us_up\")",
                  lo=0.0, hi=10.0, lo_open=True),
+    "eos_gamma": _nonneg("float", 0.0, "Gruneisen coefficient Gamma0 of the Mie-Gruneisen "
+                         "form on that Hugoniot, Gamma rho = Gamma0 rho0 (eos = \"us_up\"; "
+                         "below 2 eos_s); 0: the Hugoniot alone"),
     "specific_heat": _pos("float", OPTIONAL, "specific heat c (required by [heat])",
                           "J/(kg K)"),
     "conductivity": _nonneg("float", OPTIONAL, "thermal conductivity k (required by "

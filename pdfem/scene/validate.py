@@ -216,12 +216,20 @@ def _materials(value):
 
 
 def _eos_rules(m, path):
-    """eos_s is given exactly when the Us-up equation of state is chosen."""
+    """eos_s is given exactly when the Us-up equation of state is chosen; eos_gamma only
+    with it, below 2 eos_s (the Mie-Gruneisen pressure then rises with compression at any
+    energy)."""
     if m["eos"] == "us_up" and "eos_s" not in m:
         raise SceneError(f"{path}.eos_s", 'required with eos = "us_up"')
     if m["eos"] != "us_up" and "eos_s" in m:
         raise SceneError(f"{path}.eos_s", 'only with eos = "us_up" (got eos = '
                          f'"{m["eos"]}")')
+    if m["eos_gamma"] != 0.0 and m["eos"] != "us_up":
+        raise SceneError(f"{path}.eos_gamma", 'only with eos = "us_up" (got eos = '
+                         f'"{m["eos"]}")')
+    if m["eos"] == "us_up" and not m["eos_gamma"] < 2.0 * m["eos_s"]:
+        raise SceneError(f"{path}.eos_gamma", f"must be < 2 eos_s = {show(2.0 * m['eos_s'])} "
+                         f"(got {show(m['eos_gamma'])})")
 
 
 def _cap_rules(m, path):

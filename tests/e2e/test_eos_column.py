@@ -5,8 +5,8 @@ column's top moving from rest books what it gives as its work (energy balance wi
 import numpy as np
 import pytest
 
-from tests.helpers import datasets, pdfem
-from tests.scenes import crystal_column, write_scene
+from tests.helpers import datasets, pdfem, same_bits_on_one_and_two_ranks
+from tests.scenes import crystal_column, inline_shock, write_scene
 
 C0, S = 2770.0, 2.29
 
@@ -49,3 +49,33 @@ def test_linear_bulk_is_far_below_the_hugoniot(tmp_path):
     # the step grows by up to 30 % a step (1.3 % at the first sample, 0.2 % at the end)
     err = np.abs(a["energy/balance_error"])
     assert err.max() < 0.02 and err[-1] < 0.005
+
+
+@pytest.mark.parametrize("up,rule", [(500.0, "1pt"), (2000.0, "1pt"), (2000.0, "2x2")])
+def test_a_gruneisen_coefficient_keeps_the_shock_on_its_hugoniot(tmp_path, up, rule):
+    # Mie-Gruneisen on the same Hugoniot: the viscosity's heat carries the jump's energy into
+    # the points, so the jump state is the Hugoniot's whatever Gamma0
+    doc = crystal_column(up, rule=rule)
+    doc["materials"]["hmx"]["eos_gamma"] = 1.1
+    write_scene(tmp_path / "c.toml", doc)
+    p = pdfem(["run", "c.toml", "--quiet"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    a = datasets(tmp_path / "c.h5")
+    assert front_speed(a, up, 3.0e-3) == pytest.approx(C0 + S * up, rel=0.01)
+    # The piston's stress is the jump's, rho0 Us up
+    syy = a["frames/stress"][-1, -60:, 0, 1]
+    assert -np.median(syy) == pytest.approx(1900.0 * (C0 + S * up) * up, rel=0.01)
+    assert np.abs(a["energy/balance_error"]).max() < 0.01
+
+
+def test_gruneisen_grains_run_the_same_on_one_and_two_ranks(tmp_path):
+    # Two grains with the Mie-Gruneisen form, the hammer placed on them at 1 km/s (tens of
+    # GPa in the grains by the end): their points' energy moves with them between ranks
+    doc = inline_shock()
+    doc["materials"]["hmx"].update(eos="us_up", eos_s=2.29, eos_gamma=1.1)
+    doc["bulk_viscosity"] = {}
+    doc["blocks"][1].update(box=[0.0, 4.55e-4, 6.0e-4, 7.55e-4], velocity=[0.0, -1000.0])
+    write_scene(tmp_path / "g.toml", doc)
+    a = same_bits_on_one_and_two_ranks("g.toml", tmp_path)
+    assert np.abs(a["frames/stress"][-1]).max() > 1.0e10
+    assert np.abs(a["energy/balance_error"]).max() < 0.01

@@ -244,7 +244,8 @@ def test_sigint_through_jobs_mpirun_ends_the_job_with_mpiruns_status(tmp_path):
     """SIGINT (Ctrl-C: the process group), twice: mpirun gets it once and ends the job with
     its own status, no rank left running. The status is 1 (mpirun aborted the job) in every
     run but one: on a loaded machine it was 0 once, cause not found, so the test asserts an
-    end within 10 s with 0 or 1 and nothing left running."""
+    end with 0 or 1 and nothing left running, within 30 s (a clean-clone suite on a slow
+    machine took 10.3 s once; a job that hangs does not end at all)."""
     p = _launch(tmp_path, ["run", "s.toml", "-o", "run.h5", "--quiet"])
     _wait_for_run(p, tmp_path / "run.h5.part")
     t0 = time.time()
@@ -253,7 +254,7 @@ def test_sigint_through_jobs_mpirun_ends_the_job_with_mpiruns_status(tmp_path):
         time.sleep(0.3)
     _ended(p)
     assert p.returncode in (0, 1)
-    assert time.time() - t0 < 10
+    assert time.time() - t0 < 30
 
 
 def test_failures_through_jobs_mpirun_keep_their_status(tmp_path):

@@ -318,17 +318,17 @@ class Simulation:
             args = (s.x, self.du, s.conn, s.emat, self.mat_params, s.sig, s.mst, s.hourglass,
                     self.hg_model, 0, s.ne_own, self.f, s.ewint, s.ewp,
                     s.eth if self.coupled else self.no_eth)
-            if self.heats_eos:
-                bad = (self.element_kernel(*args, st.dt, s.qv) if self.nip == 1 else
-                       self.element_kernel(*args, None, st.dt, s.qv))
-            elif self.nip == 1:
-                bad = self.element_kernel(*args, st.dt)
+            # The elements' viscosity only for a material it heats (the kernels' default else)
+            heat = (s.qv,) if self.heats_eos else ()
+            if self.nip == 1:
+                bad = self.element_kernel(*args, st.dt, *heat)
             elif self.rest is None:
-                bad = self.element_kernel(*args, None, st.dt)
+                bad = self.element_kernel(*args, None, st.dt, *heat)
             else:
                 # Elements at rest and unloaded are skipped from the first step on (every
                 # element is computed, and checked, at t = 0)
-                bad = self.element_kernel(*args, self.rest if st.nstep > 0 else None, st.dt)
+                bad = self.element_kernel(*args, self.rest if st.nstep > 0 else None, st.dt,
+                                          *heat)
                 self.element_steps += s.ne_own
         if bad >= 0:
             self.fail(self._element_failure(bad))

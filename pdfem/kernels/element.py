@@ -172,6 +172,15 @@ def thermal_row(p, eth, e, has_th, pbuf):
 
 
 @njit(cache=True)
+def element_viscosity(qv, e):
+    """The bulk viscosity of element e from the last step (qv None or empty: 0)."""
+    if qv is not None:
+        if qv.shape[0] > 0:
+            return qv[e]
+    return 0.0
+
+
+@njit(cache=True)
 def _scatter(conn, e, fe, f):
     """f -= fe for the 4 nodes of element e, in node order."""
     for i in range(4):
@@ -185,7 +194,8 @@ def unloaded_at_rest(du, conn, sig, eth, e, has_th):
     """Element e has not moved this step (du zero at its four nodes), carries no stress at any
     point and no temperature change: its update would leave its stress, state and work as
     they are and add zero force (the cap and elastic updates of a zero increment from zero
-    stress are elastic and exact; the cap's parameter checks keep zero stress inside)."""
+    stress are elastic and exact; the cap's parameter checks keep zero stress inside; a
+    Mie-Gruneisen point's energy gains neither work nor viscous heat)."""
     if has_th and eth[e, 0] != 0.0:
         return False
     for i in range(4):
@@ -236,10 +246,7 @@ def q4_forces_2x2(x, du, conn, emat, mat_params, sig, mstate, hg, hg_model, e0, 
             rest[0] += 1
             continue
         p, dth = thermal_row(mat_params[emat[e]], eth, e, has_th, pbuf)
-        q = 0.0
-        if qv is not None:
-            if qv.shape[0] > 0:
-                q = qv[e]
+        q = element_viscosity(qv, e)
         _gather(x, du, conn, e, xc, xm, ue)
         for i in range(4):
             fe[i, 0] = 0.0

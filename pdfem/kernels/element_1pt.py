@@ -58,7 +58,7 @@ from numba import njit
 from pdfem.kernels.cap import plastic_update
 from pdfem.kernels.cap_surface import yield_value
 from pdfem.kernels.elastic import elastic_increment
-from pdfem.kernels.element import thermal_row
+from pdfem.kernels.element import element_viscosity, thermal_row
 from pdfem.kernels.eos import eos_row, gruneisen_heat, gruneisen_row
 from pdfem.kernels.hourglass_points import points_eval, start_data
 from pdfem.kernels.params import BULK, CAP, ELASTIC, EOS_G, EOS_S, MODEL, SHEAR
@@ -209,13 +209,9 @@ def q4_forces_1pt(x, du, conn, emat, mat_params, sig, mst, hg, hg_model, e0, e1,
         dq = 0.0
         if p[EOS_S] > 0.0:
             if p[EOS_G] > 0.0:
-                q = 0.0
-                if qv is not None:
-                    if qv.shape[0] > 0:
-                        q = qv[e]
                 ste = mst[e, 0]
                 p, jmid, dq = gruneisen_row(p, r0, r1, r3, d0 + d1 + d3, ste[ste.shape[0] - 1],
-                                            q, ebuf)
+                                            element_viscosity(qv, e), ebuf)
             else:
                 p = eos_row(p, r0, r1, r3, d0 + d1 + d3, ebuf)
         dwp = 0.0

@@ -154,7 +154,7 @@ def gruneisen_heat(p, s, m_old, w, dv, jmid, dq, st):
     J w + dq (w the trapezoidal stress work per current volume, dq the viscosity's from
     gruneisen_row), into the last column of the state row st, and the pressure rise of the
     deviatoric part of w at constant volume, Gamma0 J w_dev, onto the stress s (4,) whose mean
-    stress before the step was m_old. Returns that rise [Pa]."""
+    stress before the step was m_old."""
     m_new = (s[0] + s[1] + s[3]) / 3.0
     wdev = w - 0.5 * (m_old + m_new) * dv
     st[st.shape[0] - 1] += jmid * w + dq
@@ -162,7 +162,6 @@ def gruneisen_heat(p, s, m_old, w, dv, jmid, dq, st):
     s[0] -= dp
     s[1] -= dp
     s[3] -= dp
-    return dp
 
 
 @njit(cache=True)

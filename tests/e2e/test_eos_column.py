@@ -79,3 +79,33 @@ def test_gruneisen_grains_run_the_same_on_one_and_two_ranks(tmp_path):
     a = same_bits_on_one_and_two_ranks("g.toml", tmp_path)
     assert np.abs(a["frames/stress"][-1]).max() > 1.0e10
     assert np.abs(a["energy/balance_error"]).max() < 0.01
+
+
+@pytest.mark.parametrize("up", [500.0, 1000.0])
+def test_the_wave_reflected_at_the_fixed_bottom_is_the_eos_reshock(tmp_path, up):
+    # The column run on until the shock has come back 1 mm from its fixed bottom: the stress
+    # there stops the material shocked to up, on the Rayleigh line from the first shock's
+    # state to the same p(eta) (pdfem.tools.analysis.reshock)
+    from pdfem.kernels.eos import hugoniot_eta
+    from pdfem.tools.analysis.reshock import reflected_stress
+
+    rho0, us = 1900.0, C0 + S * up
+    sigma1, rho1 = rho0 * us * up, rho0 * us / (us - up)
+    sigma2 = reflected_stress(sigma1, rho1, up,
+                              lambda p: rho0 / (1.0 - hugoniot_eta(rho0 * C0 * C0, S, p)))
+    rho2 = rho0 / (1.0 - hugoniot_eta(rho0 * C0 * C0, S, sigma2))
+    back = rho2 * up / (rho2 - rho1) - up          # the reflected shock's speed in the lab
+    doc = crystal_column(up)
+    end = 3.0e-3 / us + 1.0e-3 / back
+    doc["time"]["end"] = end
+    doc["output"].update(interval=end / 40, energy_interval=end / 40)
+    write_scene(tmp_path / "c.toml", doc)
+    p = pdfem(["run", "c.toml", "--quiet"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    a = datasets(tmp_path / "c.h5")
+    # The bottom 0.6 mm (60 elements), well behind the reflected front: at rest, at sigma2
+    syy = a["frames/stress"][-1, :60, 0, 1]
+    assert -np.median(syy) == pytest.approx(sigma2, rel=0.005)
+    assert np.abs(a["frames/v"][-1, :120, 1]).max() < 1.0
+    assert sigma2 > 2.5 * sigma1
+    assert np.abs(a["energy/balance_error"]).max() < 0.01

@@ -252,23 +252,29 @@ def jump_closures(rho0, rho1, us, up, sigma):
     return {"mass": float(mass), "mass_strain": float(mass_strain), "momentum": float(mom)}
 
 
-def compacted_density(sigma, rho_s, material):
-    """The densest a bed of grains of ``material`` (a materials table, crystal density rho_s)
-    is behind a front of stress sigma [Pa, compressive]: every pore closed and every grain at
-    the compression its own bulk response gives at a mean stress sigma (the crystal's
-    Hugoniot with eos = "us_up", else its linear bulk modulus, sigma/K), less the cap's
-    largest plastic compaction W. NaN where a linear bulk modulus cannot hold sigma. With
-    strength the grains' mean stress is below the front's axial stress, and over grains at
-    unequal stresses the mean compression is below the compression at the mean stress (a
-    stiffening response), so a bed behind a steady front is no denser than this."""
+def grain_compression(sigma, material):
+    """Volumetric compression eta = 1 - V/V0 of a grain of ``material`` (a materials table) at
+    a mean stress sigma [Pa, compressive]: along the crystal's Hugoniot with eos = "us_up",
+    else sigma / K of its linear bulk modulus (1 or more where that cannot hold sigma)."""
     from pdfem.kernels.eos import hugoniot_eta
 
     k0 = float(material["bulk"])
-    w = float(material.get("W", 0.0)) if material.get("model") == "cap" else 0.0
     if material.get("eos") == "us_up":
-        eta = hugoniot_eta(k0, float(material["eos_s"]), float(sigma))
-    else:
-        eta = sigma / k0
+        return float(hugoniot_eta(k0, float(material["eos_s"]), float(sigma)))
+    return float(sigma) / k0
+
+
+def compacted_density(sigma, rho_s, material):
+    """The densest a bed of grains of ``material`` (a materials table, crystal density rho_s)
+    is behind a front of stress sigma [Pa, compressive]: every pore closed and every grain at
+    the compression its own bulk response gives at a mean stress sigma
+    (:func:`grain_compression`), less the cap's largest plastic compaction W. NaN where a
+    linear bulk modulus cannot hold sigma. With strength the grains' mean stress is below the
+    front's axial stress, and over grains at unequal stresses the mean compression is below the
+    compression at the mean stress (a stiffening response), so a bed behind a steady front is
+    no denser than this."""
+    w = float(material.get("W", 0.0)) if material.get("model") == "cap" else 0.0
+    eta = grain_compression(sigma, material)
     return float(rho_s / ((1.0 - eta) * (1.0 - w))) if eta < 1.0 else NAN
 
 

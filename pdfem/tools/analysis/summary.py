@@ -13,6 +13,7 @@ from pdfem.tools.analysis import compaction as cp
 from pdfem.tools.analysis import front as fr
 from pdfem.tools.analysis.escape import contact_reach, escape_depths
 from pdfem.tools.analysis.interpenetration import nodes_inside_interiors
+from pdfem.tools.analysis.reshock import HOLD, reshock
 from pdfem.tools.analysis.runfile import read_run
 
 NAN = float("nan")
@@ -143,6 +144,9 @@ def compute(run):
     # The bed compacted to its grains' own compression at the measured stress
     bound = fr.crystal_bound(up, mom["sigma"], us, fit["se"], rho0, rho1, rho_s,
                              run.scene["materials"][run.grain_material])
+    # The wave reflected at the anvil against the limits of the compacted bed's reshock
+    rsh = reshock(run.gauge_time, acomp, arr_gauge, run.drive, up, rho1, mom["sigma"], rho_s,
+                  run.scene["materials"][run.grain_material])
     # How much of the grains' area lies in folded corners, over the front's window and at the
     # end (a mesh folded over itself is denser than any material in it)
     folded = run.folded[frames] if frames.size else run.folded[-1:]
@@ -219,6 +223,7 @@ def compute(run):
         "snowplow": {"us": snow["us"], "sigma": snow["sigma"], "rho1": snow["rho1"],
                      "us_at_impact_speed": snow0["us"]},
         "bound": {**bound, "sigma": mom["sigma"]},
+        "reshock": rsh,
         "mesh": {"folded_front": float(np.max(folded)), "folded_end": float(run.folded[-1]),
                  "folded_max": float(np.max(run.folded)), "interpenetrated_end": interp,
                  "escape": escaped},
@@ -257,6 +262,19 @@ def _show(v):
     if isinstance(v, float):
         return f"{v:.4g}"
     return str(v)
+
+
+def _reshock_line(r):
+    """The anvil under the reflected wave beside the compacted bed's reshock limits."""
+    where = (f"{_f(r['sigma'], 1e-6)} +- {_f(r['spread'], 1e-6)} MPa over "
+             f"{_f(r['window'][0], 1e6, '.2f')}-{_f(r['window'][1], 1e6, '.2f')} us"
+             if r["sigma"] is not None and math.isfinite(r["sigma"])
+             else "not measured (no driven hold after the rise)")
+    return (f"reflected wave at the anvil (a reshock of the compacted bed), the most it holds "
+            f"for {_f(HOLD, 1e6, '.1f')} us: {where}; every pore "
+            f"closing >= {_f(r['sigma_min'], 1e-6)} MPa: "
+            + bound_word(r["kept"], "BROKEN", "n/a")
+            + f"; pores kept {_f(r['sigma_pores_kept'], 1e-6)} MPa")
 
 
 def _speed_line(name, w):
@@ -331,6 +349,7 @@ def report_text(s):
         f"{_f(c['t_final'], 1e6, '.2f')} us ({_f(c['kept'], 100, '.0f')} % of the peak kept); "
         f"from the bed height: peak {_f(c['peak_height'], 1, '.3f')}, final "
         f"{_f(c['final_height'], 1, '.3f')}",
+        _reshock_line(s["reshock"]),
         f"peak gauge stresses: hammer {_f(s['gauges']['hammer_peak'], 1e-6)} MPa, anvil "
         f"{_f(s['gauges']['anvil_peak'], 1e-6)} MPa",
         f"elastic wave speed of the grains sqrt((K+4G/3)/rho) = {_f(s['elastic_wave_speed'])} m/s",

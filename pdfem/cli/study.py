@@ -251,12 +251,12 @@ def _write_estimate(estimate, path, ranks, scene, speed):
     --speed it ran at, null for the scene's own), as JSON (written atomically)."""
     import json
 
-    from pdfem.tools.analysis.summary import _plain, _write
+    from pdfem.tools.analysis.jsontext import plain, write_atomic
     from pdfem.tools.provenance import provenance
 
     body = {"provenance": provenance(ranks), "scene": scene, "speed": speed,
             "estimate": estimate}
-    _write(path, json.dumps(_plain(body), indent=1) + "\n")
+    write_atomic(path, json.dumps(plain(body), indent=1) + "\n")
 
 
 def _print_convergence(comm, sizes, rules):
@@ -387,12 +387,12 @@ def _width(args):
     rows = ws.run_study(widths, args.seeds, args.seed_width, folder, comm,
                         lambda s: print(s, flush=True), args.allow_huge)
     if comm.rank == 0:
-        from pdfem.tools.analysis.summary import _plain
+        from pdfem.tools.analysis.jsontext import plain
 
         table, found = ws.table_lines(rows), ws.conclusions(rows)
         print("", *table, "", *found, sep="\n")
         with open(args.prefix + ".json.part", "w") as f:
-            json.dump(_plain({"rows": rows, "conclusions": found}), f, indent=1)
+            json.dump(plain({"rows": rows, "conclusions": found}), f, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         print(f"pdfem study width: {args.prefix}.json, beds and runs in {folder}/", flush=True)
     barrier(comm)
@@ -454,14 +454,14 @@ def _hotspots(args):
     barrier(comm)
     rows, chg = study.run_all(levels, thresholds, spot)
     if comm.rank == 0:
-        from pdfem.tools.analysis.summary import _plain
+        from pdfem.tools.analysis.jsontext import plain
 
         print("", *hs.table_lines(rows, chg), sep="\n")
         with open(args.prefix + ".csv.part", "w") as f:
             f.write(hs.csv_text(rows))
         os.replace(args.prefix + ".csv.part", args.prefix + ".csv")
         with open(args.prefix + ".json.part", "w") as f:
-            json.dump(_plain({"scene": path, "rows": rows, "changes": chg}), f, indent=1)
+            json.dump(plain({"scene": path, "rows": rows, "changes": chg}), f, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         print(f"pdfem study hotspots: {args.prefix}.csv, {args.prefix}.json, runs in "
               f"{folder}/", flush=True)
@@ -525,12 +525,12 @@ def _speeds(args):
     barrier(comm)
     rows, stops = sp.run_rungs(rungs, folder, comm, log=lambda m: print(m, flush=True))
     if comm.rank == 0:
-        from pdfem.tools.analysis.summary import _plain
+        from pdfem.tools.analysis.jsontext import plain
         from pdfem.tools.provenance import provenance
 
         print("", *sp.table_lines(rows), sep="\n")
         with open(args.prefix + ".json.part", "w") as f:
-            json.dump(_plain({"bed": args.bed, "rule": args.rule, "mesh": args.mesh or "kite",
+            json.dump(plain({"bed": args.bed, "rule": args.rule, "mesh": args.mesh or "kite",
                               "sides": args.sides, "provenance": provenance(comm.size),
                               "rows": rows}), f, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")

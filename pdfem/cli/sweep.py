@@ -187,7 +187,7 @@ def run(args):
         barrier(comm)
         return 3
     if comm.rank == 0:
-        from pdfem.tools.analysis.summary import _plain
+        from pdfem.tools.analysis.jsontext import plain
         from pdfem.tools.provenance import provenance
 
         checks = _checks(points)
@@ -196,7 +196,7 @@ def run(args):
         body = {"provenance": provenance(comm.size), "points": points, "checks": checks,
                 "static": None if static is None else {k: v for k, v in static.items()}}
         with open(args.prefix + ".json.part", "w") as fh:
-            json.dump(_plain(body), fh, indent=1)
+            json.dump(plain(body), fh, indent=1)
         os.replace(args.prefix + ".json.part", args.prefix + ".json")
         sweep_plot(points, args.prefix + ".png", static=static)
         print(f"pdfem sweep: {args.prefix}.json, {args.prefix}.png", flush=True)

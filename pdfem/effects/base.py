@@ -21,7 +21,6 @@ it never assigns the state's time or arrays, and never writes another effect's a
 import numpy as np
 
 from pdfem.energy import declare_terms
-from pdfem.io.layout import declare_frame_fields
 
 
 class Effect:
@@ -53,7 +52,6 @@ class Effect:
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
         declare_terms(cls.__name__, cls.energy)
-        declare_frame_fields(cls.__name__, cls.frame_fields)
 
     def __init__(self, table, scene):
         self.table = table

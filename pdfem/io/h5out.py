@@ -24,7 +24,7 @@ from pdfem import __version__
 from pdfem.errors import InputError
 from pdfem.io.contacts import contact_rows, copy_contacts, drop_after, write_contacts
 from pdfem.io.gather import to_blocks
-from pdfem.io.layout import FRAME_LAYOUT
+from pdfem.io.layout import frame_layout
 from pdfem.io.segments import (
     check_segments,
     copy_frames,
@@ -50,7 +50,7 @@ def frame_fields(nip, fields):
 def field_table(st, ctx):
     """{name: (node|elem, trailing shape, values(nidx, eidx))} of the run's frame fields: the
     core ones and those of its effects (Effect.frame_fields, Effect.frame_values), laid out
-    as :data:`pdfem.io.layout.FRAME_LAYOUT` says."""
+    as :func:`pdfem.io.layout.frame_layout` says of them."""
     s = st.store
     values = {
         "x": lambda n, e: s.x[n],
@@ -61,9 +61,10 @@ def field_table(st, ctx):
     for eff in ctx.effects:
         for name in eff.frame_fields:
             values[name] = partial(eff.frame_values, st, ctx, name)
+    layout = frame_layout([type(eff) for eff in ctx.effects])
     out = {}
     for name, get in values.items():
-        per, tail = FRAME_LAYOUT[name]
+        per, tail = layout[name]
         out[name] = (per, tuple(ctx.nip if n is None else n for n in tail), get)
     return out
 

@@ -4,8 +4,8 @@ One table read by the writer (:mod:`pdfem.io.h5out`) and by the check of a run f
 it is read (:mod:`pdfem.io.runcheck`): ``node`` fields have one row per node, ``elem`` fields
 one per element; ``None`` in a trailing shape is the integration-point count of the run. The
 core fields of every run are listed here; an effect declares its own
-(:attr:`pdfem.effects.base.Effect.frame_fields`), which :func:`declare_frame_fields` adds when
-its class is defined.
+(:attr:`pdfem.effects.base.Effect.frame_fields`), which :func:`frame_layout` adds to them. This
+module reads the effects; they do not import it.
 """
 
 # The frame fields of every run (stress_cell: the element mean of a several-point rule)
@@ -15,24 +15,35 @@ CORE_FRAME = {
     "stress": ("elem", (None, 4)),
     "stress_cell": ("elem", (4,)),
 }
-FRAME_LAYOUT = dict(CORE_FRAME)
 
 
-def declare_frame_fields(owner, fields):
-    """Add an owner's {name: (per, tail)} frame fields to :data:`FRAME_LAYOUT`; a name may
-    not change its layout."""
-    for name, (per, tail) in fields.items():
-        if per not in ("node", "elem"):
-            raise ValueError(f"frame field {name!r} of {owner}: per {per!r} is not node or elem")
-        if FRAME_LAYOUT.get(name, (per, tuple(tail))) != (per, tuple(tail)):
-            raise ValueError(f"frame field {name!r} of {owner}: its layout differs from the "
-                             f"declared {FRAME_LAYOUT[name]}")
-        FRAME_LAYOUT[name] = (per, tuple(tail))
+def frame_layout(effects=None):
+    """The frame fields of a run file: :data:`CORE_FRAME` and those the effects declare
+    (``Effect.frame_fields``), of ``effects`` (classes; default every effect class defined,
+    built in or added, in the order they were defined). A field's ``per`` must be node or
+    elem, and a name may not be laid out twice in different ways."""
+    if effects is None:
+        import pdfem.effects  # noqa: F401  (defines the built-in effects)
+        from pdfem.effects.base import Effect
+
+        effects = _subclasses(Effect)
+    layout = dict(CORE_FRAME)
+    for cls in effects:
+        for name, (per, tail) in cls.frame_fields.items():
+            owner = cls.__name__
+            if per not in ("node", "elem"):
+                raise ValueError(f"frame field {name!r} of {owner}: per {per!r} is not node or "
+                                 "elem")
+            if layout.get(name, (per, tuple(tail))) != (per, tuple(tail)):
+                raise ValueError(f"frame field {name!r} of {owner}: its layout differs from the "
+                                 f"declared {layout[name]}")
+            layout[name] = (per, tuple(tail))
+    return layout
 
 
-def frame_layout():
-    """:data:`FRAME_LAYOUT` with every built-in effect's fields declared (their classes are
-    defined when pdfem.effects is imported), and those of any effect registered since."""
-    import pdfem.effects  # noqa: F401
-
-    return FRAME_LAYOUT
+def _subclasses(cls):
+    """Every subclass of ``cls``, depth first in the order each was defined."""
+    out = []
+    for sub in cls.__subclasses__():
+        out += [sub, *_subclasses(sub)]
+    return out

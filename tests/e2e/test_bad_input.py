@@ -546,7 +546,7 @@ def test_material_command_knows_the_named_paths():
 
 def test_complete_run_files_pass_the_run_file_check(folder):
     """The checker of analyse and export accepts what the run wrote, every frame field too."""
-    from pdfem.io.layout import FRAME_LAYOUT
+    from pdfem.io.layout import frame_layout
     from pdfem.io.runcheck import check_run_file
 
     for name, series in (("good.h5", False), ("sh.h5", True)):
@@ -556,7 +556,7 @@ def test_complete_run_files_pass_the_run_file_check(folder):
                     f["mesh/conn"].shape[0])
             fields = set(f["frames"]) - {"time"}
         assert got == want and want[0] >= 3
-    assert fields == set(FRAME_LAYOUT)
+    assert fields == set(frame_layout())
 
 
 def test_material_accepts_every_material_of_the_packaged_scene(tmp_path):

@@ -7,7 +7,7 @@ import json
 import math
 
 from pdfem.tools.analysis.hotspots import MECHANISMS, PERCENTILES
-from pdfem.tools.analysis.summary import _plain, _write
+from pdfem.tools.analysis.jsontext import plain, write_atomic
 
 FIGURES = ("-hotspots-map", "-hotspots-distribution", "-hotspots-count")
 PLOT_FORMATS = ("png", "pdf", "none")
@@ -89,11 +89,11 @@ def front_csv(result):
 def write_outputs(result, maps, prefix, plots="png"):
     """Write every file of ``output_files(prefix, plots, shock)``; return their paths."""
     shock = result["front"] is not None
-    _write(prefix + "-hotspots.csv", regions_csv(result))
-    _write(prefix + "-hotspots-spots.csv", spots_csv(result))
+    write_atomic(prefix + "-hotspots.csv", regions_csv(result))
+    write_atomic(prefix + "-hotspots-spots.csv", spots_csv(result))
     if shock:
-        _write(prefix + "-hotspots-front.csv", front_csv(result))
-    _write(prefix + "-hotspots.json", json.dumps(_plain(result), indent=1) + "\n")
+        write_atomic(prefix + "-hotspots-front.csv", front_csv(result))
+    write_atomic(prefix + "-hotspots.json", json.dumps(plain(result), indent=1) + "\n")
     if plots != "none":
         from pdfem.tools.analysis import hotplots
 

@@ -5,7 +5,6 @@ Compressive stresses are quoted as positive numbers (-sigma_yy of the Cauchy str
 
 import json
 import math
-import os
 
 import numpy as np
 
@@ -13,6 +12,7 @@ from pdfem.tools.analysis import compaction as cp
 from pdfem.tools.analysis import front as fr
 from pdfem.tools.analysis.escape import contact_reach, escape_depths
 from pdfem.tools.analysis.interpenetration import nodes_inside_interiors
+from pdfem.tools.analysis.jsontext import plain, write_atomic
 from pdfem.tools.analysis.reshock import HOLD, reshock
 from pdfem.tools.analysis.runfile import read_run
 
@@ -54,28 +54,6 @@ def output_files(prefix, plots="png", thermal=False):
 def thermal_fields(fields):
     """Whether frame fields named ``fields`` hold temperatures (the census reads them)."""
     return any(n in fields for n in ("element_temperature", "temperature"))
-
-
-def _plain(v):
-    """JSON-ready copy: numpy scalars to floats/ints, NaN/inf to None, arrays to lists."""
-    if isinstance(v, dict):
-        return {str(k): _plain(x) for k, x in v.items()}
-    if isinstance(v, (list, tuple, np.ndarray)):
-        return [_plain(x) for x in v]
-    if isinstance(v, (bool, np.bool_)):
-        return bool(v)
-    if isinstance(v, (int, np.integer)):
-        return int(v)
-    if isinstance(v, (float, np.floating)):
-        return float(v) if math.isfinite(v) else None
-    return v
-
-
-def _write(path, text):
-    """Write ``text`` to ``path`` atomically."""
-    with open(path + ".part", "w") as f:
-        f.write(text)
-    os.replace(path + ".part", path)
 
 
 def _momentum(run, fit, frames, sig_bed, t, hcomp):
@@ -439,9 +417,9 @@ def analyse(run_path, prefix, extra=None, sweep=None):
     plots = run.shock.get("plots", "png")
     if _holds_temperatures(run_path):
         summary["hotspots"] = _census(run_path, prefix, plots)
-    plain = _plain(summary)
-    _write(prefix + "-summary.json", json.dumps(plain, indent=1) + "\n")
-    _write(prefix + "-summary.txt", report_text(plain))
+    doc = plain(summary)
+    write_atomic(prefix + "-summary.json", json.dumps(doc, indent=1) + "\n")
+    write_atomic(prefix + "-summary.txt", report_text(doc))
     if plots == "png":
         _figures(run, summary, arrays, prefix, sweep)
     return {**summary, "arrays": arrays}

@@ -101,8 +101,8 @@ def test_small_shock_on_2_ranks(small_bed, tmp_path):
     """The CI-sized shot: a piston at 288 m/s into the small 0.65 bed, brought to rest and
     released. The front runs at or above the snowplow bound of its measured up, the mass
     jump closes in strain form within 15 %, the energy balance within 2 %, the bed ends
-    compacted (at least half of the peak compaction kept); the run file is the same on 1
-    rank."""
+    compacted (at least half of the peak compaction kept), the anvil holds the reshock of the
+    compacted bed; the run file is the same on 1 rank."""
     write_scene(tmp_path / "s.toml", small_shock(small_bed))
     p = pdfem(["run", "s.toml"], tmp_path, ranks=2)
     assert p.returncode == 0, p.stderr
@@ -118,6 +118,11 @@ def test_small_shock_on_2_ranks(small_bed, tmp_path):
     assert s["energy"]["balance_error_max"] < 0.02
     assert comp["final"] >= 0.5 * comp["peak"] > 0.0
     assert s["shocked"]["momentum_ahead"] >= 0.0
+    # The wave reflected at the anvil is a reshock of the compacted bed: no less than every
+    # pore closing needs, no more than keeping them (with a tenth for strength and ringing)
+    r = s["reshock"]
+    assert r["kept"] is True and r["sigma"] >= r["sigma_min"]
+    assert r["sigma"] < 1.1 * r["sigma_pores_kept"]
     p1 = pdfem(["run", "s.toml", "-o", "one.h5", "--quiet"], tmp_path, ranks=1)
     assert p1.returncode == 0, p1.stderr
     a, b = datasets(tmp_path / "shock.h5"), datasets(tmp_path / "one.h5")

@@ -7,7 +7,13 @@ import pytest
 
 from pdfem.kernels.eos import hugoniot_eta
 from pdfem.tools.analysis import front as fr
-from pdfem.tools.analysis.reshock import anvil_plateau, bed_reshock, reflected_stress, reshock
+from pdfem.tools.analysis.reshock import (
+    anvil_plateau,
+    bed_reshock,
+    hold_end,
+    reflected_stress,
+    reshock,
+)
 
 LINEAR = {"model": "elastic", "bulk": 12.7e9}
 HMX = {"model": "cap", "bulk": 12.7e9, "eos": "us_up", "eos_s": 2.29, "W": 0.01}
@@ -76,12 +82,32 @@ def test_the_anvil_plateau_is_the_stress_it_holds_while_the_piston_drives():
     assert p["sigma"] == pytest.approx(1.6e9, rel=0.02) and 0.05e9 < p["spread"] < 0.1e9
     # Too short a stretch measures nothing
     assert math.isnan(anvil_plateau(t, clean, 4.0e-6, 4.1e-6)["sigma"])
+    # Still rising at the end of the stretch: not a held stress
+    assert math.isnan(anvil_plateau(t, clean, 4.0e-6, 4.6e-6)["sigma"])
     piston = {"driven": True, "release": 6.0e-6, "ramp_down": 0.5e-6}
-    r = reshock(t, clean, 4.0e-6, piston, 285.9, 1831.4, 310.8e6, 1900.0, HMX)
-    assert r["kept"] is True and r["sigma_min"] < 1.6e9
-    # Below the bound it is broken; a free hammer's decaying state is not measured
-    assert reshock(t, 0.5 * clean, 4.0e-6, piston, 285.9, 1831.4, 310.8e6, 1900.0,
-                   HMX)["kept"] is False
+    args = (285.9, 1831.4, 310.8e6, 1900.0, HMX)
+    r = reshock(t, clean, 4.0e-6, piston, 4.0e-3, *args)
+    assert r["kept"] is True and r["sigma_min"] < 1.6e9 and r["hold_end"] == 6.0e-6
+    # Below the bound it is broken
+    assert reshock(t, 0.5 * clean, 4.0e-6, piston, 2.7e-3, *args)["kept"] is False
+    # A free hammer's decaying state is not measured, nor one that rose after the piston
+    # began to stop
     free = {"driven": False, "release": math.inf, "ramp_down": 0.0}
-    r = reshock(t, clean, 4.0e-6, free, 285.9, 1831.4, 310.8e6, 1900.0, HMX)
+    r = reshock(t, clean, 4.0e-6, free, 2.7e-3, *args)
     assert math.isnan(r["sigma"]) and r["kept"] is None and r["sigma_min"] > 0.31e9
+    late = {"driven": True, "release": 4.2e-6, "ramp_down": 0.5e-6}
+    assert reshock(t, clean, 4.0e-6, late, 2.7e-3, *args)["kept"] is None
+
+
+def test_the_hold_ends_when_the_stiffest_reshock_could_be_back_from_the_piston():
+    # Held to the end: the reflected wave at the pores-kept estimate's speed D - u1 crosses the
+    # bed's height at the rise and comes back
+    held = {"driven": True, "release": math.inf, "ramp_down": 0.0}
+    sigma1, rho1, u1, fast = 310.8e6, 1831.4, 285.9, 2167.3e6
+    speed = (fast - sigma1) / (rho1 * u1) - u1
+    end = hold_end(4.37e-6, held, 2.74e-3, sigma1, rho1, u1, fast)
+    assert end == pytest.approx(4.37e-6 + 2.0 * 2.74e-3 / speed, rel=1e-12)
+    assert 3000.0 < speed < 3500.0
+    # The release comes first in the packaged scene
+    piston = {"driven": True, "release": 5.65e-6, "ramp_down": 0.5e-6}
+    assert hold_end(4.37e-6, piston, 2.74e-3, sigma1, rho1, u1, fast) == 5.65e-6

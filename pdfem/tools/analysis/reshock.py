@@ -85,7 +85,8 @@ def anvil_plateau(gauge_time, anvil_comp, t_rise, t_end, width=HOLD):
     still drives the bed: its stop reaches the anvil later still), and the gauge's standard
     deviation over that stretch. The mean over a few of the anvil plate's ringing periods
     passes over the ringing and the reflected wave's own rise. NaN where no such stretch
-    exists."""
+    exists, or where the gauge is still rising: its running mean must come within a tenth of
+    that largest one at least 2 ``width`` before ``t_end``."""
     none = {"sigma": NAN, "spread": NAN, "window": [NAN, NAN]}
     t, c = np.asarray(gauge_time, float), np.asarray(anvil_comp, float)
     if not (np.isfinite(t_rise) and np.isfinite(t_end)) or t_end - t_rise < width or t.size < 2:
@@ -98,22 +99,45 @@ def anvil_plateau(gauge_time, anvil_comp, t_rise, t_end, width=HOLD):
         return none
     means = (np.interp(ts + width, t, cum) - np.interp(ts, t, cum)) / width
     k = int(np.argmax(means))
+    # Held, not still rising: within a tenth of it at least one more width before the end
+    t90 = ts[np.flatnonzero(means >= 0.9 * means[k])[0]]
+    if t90 + 2.0 * width > t_end:
+        return none
     sel = (t >= ts[k]) & (t <= ts[k] + width)
     return {"sigma": float(means[k]), "spread": float(np.std(c[sel])),
             "window": [float(ts[k]), float(ts[k] + width)]}
 
 
-def reshock(gauge_time, anvil_comp, t_rise, drive, up, rho1, sigma1, rho_s, material):
-    """The anvil's plateau under the reflected wave beside the two limits of
-    :func:`bed_reshock` for the measured state behind the front; ``kept`` says whether the
-    plateau is at or above the bound sigma_min (within its spread), None where either is
-    undefined. Measured only under a driven piston (``drive``, as the run file's) up to its
-    release; a free hammer's reflected state decays as the hammer slows."""
-    t_end = min(drive["release"], gauge_time[-1]) if drive["driven"] and len(gauge_time) \
-        else NAN
-    plateau = anvil_plateau(gauge_time, anvil_comp, t_rise, t_end)
+def hold_end(t_rise, drive, height, sigma1, rho1, u1, sigma_fast):
+    """Until when the anvil holds the reflected wave's state: NaN unless a piston drives the bed
+    (``drive``, as the run file's) and the anvil rises (``t_rise``) before it starts to stop;
+    then the earlier of its release and the time the reflected wave needs to reach the piston
+    and come back, over the bed's ``height`` at the rise, at the speed of the stiffest reshock
+    (stress ``sigma_fast``): D - u1 in the lab, D = (sigma_fast - sigma1)/(rho1 u1). A free
+    hammer's reflected state decays as it slows, and a second reshock from the piston is not
+    this one."""
+    if not (drive["driven"] and math.isfinite(t_rise)
+            and t_rise < drive["release"] - drive["ramp_down"]):
+        return NAN
+    if not all(math.isfinite(float(q)) for q in (height, sigma1, rho1, u1, sigma_fast)) \
+            or u1 <= 0.0:
+        return NAN
+    speed = (sigma_fast - sigma1) / (rho1 * u1) - u1
+    back = t_rise + 2.0 * height / speed if speed > 0.0 else math.inf
+    return float(min(drive["release"], back))
+
+
+def reshock(gauge_time, anvil_comp, t_rise, drive, height, up, rho1, sigma1, rho_s, material):
+    """The anvil's plateau under the reflected wave (:func:`anvil_plateau` until
+    :func:`hold_end`) beside the two limits of :func:`bed_reshock` for the measured state
+    behind the front; ``kept`` says whether the plateau is at or above the bound sigma_min
+    (within its spread), None where either is undefined."""
     limits = bed_reshock(sigma1, rho1, up, rho_s, material)
+    t_end = hold_end(t_rise, drive, height, sigma1, rho1, up, limits["sigma_pores_kept"])
+    if len(gauge_time):
+        t_end = min(t_end, float(gauge_time[-1]))
+    plateau = anvil_plateau(gauge_time, anvil_comp, t_rise, t_end)
     p, lo = plateau["sigma"], limits["sigma_min"]
     kept = bool(p + plateau["spread"] >= lo) if np.isfinite(p) and np.isfinite(lo) else None
     return {**limits, "sigma": p, "spread": plateau["spread"], "window": plateau["window"],
-            "kept": kept}
+            "kept": kept, "hold_end": t_end}

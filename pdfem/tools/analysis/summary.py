@@ -123,8 +123,10 @@ def compute(run):
     bound = fr.crystal_bound(up, mom["sigma"], us, fit["se"], rho0, rho1, rho_s,
                              run.scene["materials"][run.grain_material])
     # The wave reflected at the anvil against the limits of the compacted bed's reshock
-    rsh = reshock(run.gauge_time, acomp, arr_gauge, run.drive, up, rho1, mom["sigma"], rho_s,
-                  run.scene["materials"][run.grain_material])
+    h_rise = float(np.interp(arr_gauge, t, run.hammer_y - run.anvil_y)) \
+        if np.isfinite(arr_gauge) else NAN
+    rsh = reshock(run.gauge_time, acomp, arr_gauge, run.drive, h_rise, up, rho1, mom["sigma"],
+                  rho_s, run.scene["materials"][run.grain_material])
     # How much of the grains' area lies in folded corners, over the front's window and at the
     # end (a mesh folded over itself is denser than any material in it)
     folded = run.folded[frames] if frames.size else run.folded[-1:]
@@ -247,7 +249,7 @@ def _reshock_line(r):
     where = (f"{_f(r['sigma'], 1e-6)} +- {_f(r['spread'], 1e-6)} MPa over "
              f"{_f(r['window'][0], 1e6, '.2f')}-{_f(r['window'][1], 1e6, '.2f')} us"
              if r["sigma"] is not None and math.isfinite(r["sigma"])
-             else "not measured (no driven hold after the rise)")
+             else "not measured (no stress held while a piston drove the bed)")
     return (f"reflected wave at the anvil (a reshock of the compacted bed), the most it holds "
             f"for {_f(HOLD, 1e6, '.1f')} us: {where}; every pore "
             f"closing >= {_f(r['sigma_min'], 1e-6)} MPa: "

@@ -254,7 +254,7 @@ def test_bound_of_the_compacted_crystal():
     assert fr.crystal_bound(1500.0, 6.0e9, b["us_min"] - 41.0, 40.0, 1235.0, 2200.0,
                             1900.0, eos)["kept"] is False
     # No front fitted (an unsteady wave): nothing to check, which is not a broken bound
-    from pdfem.tools.analysis.summary import bound_word
+    from pdfem.tools.analysis.report import bound_word
 
     for us, up, rho1 in ((np.nan, np.nan, np.nan), (3300.0, 1500.0, np.nan)):
         none = fr.crystal_bound(up, 6.0e9, us, 40.0, 1235.0, rho1, 1900.0, eos)
@@ -450,7 +450,7 @@ def test_snapshots_fold_a_periodic_mesh_into_the_box():
 def test_escape_line_says_whether_the_material_came_back():
     """The summary's escape line calls grain material past the anvil lost only while some of it
     is still past at the end; a corner pressed in and out again is said to be back."""
-    from pdfem.tools.analysis.summary import _escape_line
+    from pdfem.tools.analysis.report import _escape_line
 
     e = {"below_anvil": 42e-6, "above_hammer": 1e-6, "reach": 30e-6, "past_sides": None,
          "escaped": True, "mass": 4.7e-4, "t_mass": 0.44e-6, "mass_end": 0.0}

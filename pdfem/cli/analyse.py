@@ -64,7 +64,8 @@ def run(args):
     from pdfem.errors import InputError
     from pdfem.io.probe import check_metadata
     from pdfem.tools.analysis import analyse
-    from pdfem.tools.analysis.summary import output_files, report_text
+    from pdfem.tools.analysis.report import report_text
+    from pdfem.tools.analysis.summary import output_files
 
     if not args.runfile:
         raise InputError("runfile: empty file name")

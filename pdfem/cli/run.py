@@ -97,7 +97,7 @@ def shock_report(out, summary, comm, quiet):
 
     from pdfem.parallel.mpi import barrier
     from pdfem.tools.analysis import analyse
-    from pdfem.tools.analysis.summary import report_text
+    from pdfem.tools.analysis.report import report_text
 
     if comm.rank == 0:
         t0 = time.perf_counter()

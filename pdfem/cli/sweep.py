@@ -137,7 +137,7 @@ def run(args):
     from pdfem.solver import Simulation
     from pdfem.tools.analysis import analyse
     from pdfem.tools.analysis.plots import sweep_plot
-    from pdfem.tools.analysis.summary import bound_word
+    from pdfem.tools.analysis.report import bound_word
 
     comm = world()
     check_ranks(scene, comm.size)
@@ -257,7 +257,7 @@ def _checks(points):
     """Lines on the Hugoniot's shape: fronts fitted, monotone Us(up) and stress(density),
     every front against the snowplow speed and the bound of the compacted crystal, meshes that
     fold."""
-    from pdfem.tools.analysis.summary import FOLDED_LIMIT
+    from pdfem.tools.analysis.report import FOLDED_LIMIT
 
     ok = [p for p in points if p["us"] is not None and p["us"] == p["us"]]
     lines = [f"{len(ok)} of {len(points)} speeds have a steady front"]

@@ -26,7 +26,7 @@ import tomllib
 from importlib import resources
 
 from pdfem.errors import InputError
-from pdfem.tools.analysis.summary import bound_word
+from pdfem.tools.analysis.report import bound_word
 
 # The packaged beds and the speed their times are written for [m/s]
 BEDS = {"small": "shot912_small.toml", "default": "shot912.toml"}

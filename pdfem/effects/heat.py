@@ -27,6 +27,10 @@ mechanical side (pdfem.energy):
                  thermo-elastic heat 3 alpha T d(pA) and the stress work on the thermal strain
                  are both paid by this term. One without the other creates energy: the scene
                  check refuses [thermoelastic] without [thermal_expansion] and the reverse.
+                 An element of a Mie-Gruneisen material (eos_gamma > 0) has no thermal strain:
+                 its thermal pressure is Gamma0 times its points' energy, and its compression
+                 heats it adiabatically, dT = Gamma0 T d(eta); that heat is energy its stress
+                 work already holds, so its term is minus the heat (pdfem.kernels.heat).
     heat_bc      what the held nodes took or gave
 so thermal - heat_paid - heat_bc - (heat of thermo-elasticity) stays zero only when every
 source has its mechanical counterpart; a source that has none shows in the balance error.
@@ -53,6 +57,8 @@ from pdfem.kernels.heat import (
     advance_temperature,
     conduction_flows,
     conduction_stable_dt,
+    coupling_state,
+    element_areas,
     element_heat,
     element_thermal_state,
     element_to_nodes,
@@ -61,7 +67,7 @@ from pdfem.kernels.heat import (
     thermal_energy,
 )
 from pdfem.kernels.integrate import body_sums
-from pdfem.kernels.params import ALPHA, COND, CP, RHO, T_REF
+from pdfem.kernels.params import ALPHA, COND, CP, EOS_G, RHO, T_REF
 from pdfem.store import BODY, ELEM, NODE, Field
 
 # Columns of the per-body accumulator hacc
@@ -95,6 +101,7 @@ COUPLED_FIELDS = (
     Field("tprev", NODE, (), np.float64),
     Field("eth", ELEM, (3,), np.float64),
     Field("tau_prev", ELEM, (), np.float64),
+    Field("area_ref", ELEM, (), np.float64),
 )
 
 
@@ -152,7 +159,9 @@ class Heat(Effect):
             cap_table[:, RHO] = ctx.mat_params[:, RHO] * ctx.mat_params[:, CP]
             q4_lumped_mass(s.x, s.conn, s.emat, cap_table, 0, s.nelem, s.tcap)
             if self.couple_elements:
-                kirchhoff_pressure(s.x, s.conn, s.sig, 0, s.nelem, s.tau_prev)
+                element_areas(s.x, s.conn, 0, s.nelem, s.area_ref)
+                coupling_state(s.x, s.conn, s.emat, ctx.mat_params, s.sig, s.mst, s.eth, 0,
+                               s.nelem, s.tau_prev)
         self._hold_blocks(st, ctx)
         self.src = np.zeros(s.nnode)
         self.q = np.zeros(s.nnode)
@@ -198,11 +207,12 @@ class Heat(Effect):
             # Element sources: dissipation, viscous heating, thermo-elastic coupling
             if self.beta > 0.0 or self.gamma > 0.0 or self.thermoelastic:
                 none = np.empty(0)
-                tau_prev = s.tau_prev if self.thermoelastic else none
+                tau_prev, area_ref, eth = ((s.tau_prev, s.area_ref, s.eth) if self.thermoelastic
+                                           else (none, none, np.empty((0, 3))))
                 ewq, ewq_prev = (s.ewq, s.ewq_prev) if self.gamma > 0.0 else (none, none)
-                element_heat(s.x, s.T, s.conn, s.emat, ctx.mat_params, s.sig, s.ewp,
-                             s.ewp_prev, ewq, ewq_prev, tau_prev, self.beta, self.gamma,
-                             self.thermoelastic, 0, s.ne_own, self.eh, s.eheat)
+                element_heat(s.x, s.T, s.conn, s.emat, ctx.mat_params, s.sig, s.mst, eth,
+                             area_ref, s.ewp, s.ewp_prev, ewq, ewq_prev, tau_prev, self.beta,
+                             self.gamma, self.thermoelastic, 0, s.ne_own, self.eh, s.eheat)
                 element_to_nodes(s.x, s.conn, 0, s.ne_own, self.eh, self.src)
             _body_node_sums(self.src, s.node_body, s.nn_own, s.hacc[:, HACC_SRC])
             # Conduction sub-steps (the sources enter with the first)
@@ -276,13 +286,16 @@ class Heat(Effect):
             body_sums(s.eth[:ne, 2], s.estart[:nb], s.ne[:nb], w)
             out["thermal_work"] = w
         if self.thermoelastic:
-            # -3 alpha T_e p_e A_e of the present state
+            # -3 alpha T_e p_e A_e of the present state; minus the heat a Mie-Gruneisen
+            # material's compression gave, which its stress work already holds
             tau = np.empty(ne)
             kirchhoff_pressure(s.x, s.conn, s.sig, 0, ne, tau)
             te = s.T[s.conn[:ne]].mean(axis=1)
+            eos = ctx.mat_params[s.emat[:ne], EOS_G] > 0.0
+            ce = np.where(eos, -s.eheat[:ne, H_THERMOELASTIC],
+                          -3.0 * ctx.mat_params[s.emat[:ne], ALPHA] * te * tau)
             c = np.empty(nb)
-            body_sums(-3.0 * ctx.mat_params[s.emat[:ne], ALPHA] * te * tau, s.estart[:nb],
-                      s.ne[:nb], c)
+            body_sums(ce, s.estart[:nb], s.ne[:nb], c)
             out["coupling"] = c
 
 

@@ -8,8 +8,10 @@ columns the element kernels read.
     [conduction]              conduction within each body (materials' conductivity)
     [dissipation_heating]     beta x plastic work heats the element (report eq. 48)
     [viscous_heating]         a fraction of the bulk-viscosity work heats the element
-    [thermoelastic]           -3 K alpha T d(volume) heats a compressed element (eq. 48)
-    [thermal_expansion]       isotropic thermal strain alpha dT in the stress update
+    [thermoelastic]           -3 K alpha T d(volume) heats a compressed element (eq. 48);
+                              Gamma0 T d(eta) with an equation of state
+    [thermal_expansion]       isotropic thermal strain alpha dT in the stress update (a
+                              Gruneisen coefficient's pressure with an equation of state)
     [temperature_dependence]  moduli and strength soften linearly with T (material.softened)
 """
 
@@ -61,38 +63,55 @@ class Thermoelastic(Effect):
     # Thermo-elastic heating and thermal expansion are one coupling: either alone creates
     # energy that nothing pays for (pdfem.effects.heat)
     requires = ("heat", "thermal_expansion")
-    material_keys = ("expansion",)
-
-
-def nonlinear_bulk(materials):
-    """The name of the first material (a dict of name -> table, resolved or as written) whose
-    bulk is not linear (an equation of state), or None: such a material has no thermal pressure
-    for the thermo-elastic coupling (:class:`ThermalExpansion`)."""
-    return next((name for name, m in materials.items() if m.get("eos", "linear") != "linear"),
-                None)
-
-
-class ThermalExpansion(Effect):
-    """Thermal strain alpha dT (isotropic, sigma_zz included) removed from the elastic strain."""
-
-    name = "thermal_expansion"
-    requires = ("heat", "thermoelastic")
-    material_keys = ("expansion",)
 
     @classmethod
     def check_scene(cls, resolved):
-        """Every material with a linear bulk: the thermal pressure of the coupling is 3 alpha
-        K, and on a Hugoniot's tangent (5 K0 at 6 GPa, 15 K0 at 20 GPa for HMX) it feeds
-        the thermo-elastic heat back into itself until the temperature runs away (measured:
-        the small shot-912 bed's thermal variant at level 3). An equation of state needs its
-        own thermal pressure (a Grueneisen term) for that."""
-        name = nonlinear_bulk(resolved["materials"])
-        if name is not None:
-            eos = resolved["materials"][name]["eos"]
-            raise SceneError(f"materials.{name}.eos", f"\"{eos}\" has no thermal pressure: "
-                             "[thermal_expansion] and [thermoelastic] need eos = \"linear\" "
-                             "(their 3 alpha K would grow with the Hugoniot's bulk modulus and "
-                             "the heating run away)")
+        """Every material couples (:func:`check_coupled_materials`)."""
+        check_coupled_materials(resolved["materials"], cls.name)
+
+
+def without_thermal_pressure(materials):
+    """The name of the first material (a dict of name -> table, resolved or as written) with
+    an equation of state and no Gruneisen coefficient, or None: such a material has no thermal
+    pressure for the thermo-elastic coupling (:func:`check_coupled_materials`)."""
+    return next((name for name, m in materials.items()
+                 if m.get("eos", "linear") != "linear" and not m.get("eos_gamma", 0.0) > 0.0),
+                None)
+
+
+def check_coupled_materials(materials, table):
+    """The materials of a thermo-elastic coupling (a dict of name -> resolved table): a linear
+    bulk needs its expansion alpha (thermal pressure 3 alpha K); an equation of state needs
+    a Gruneisen coefficient (thermal pressure Gamma0 rho0 c dT, from its points' energy) and
+    no expansion. A Hugoniot without Gamma has no thermal pressure: 3 alpha K on its tangent
+    (5 K0 at 6 GPa, 15 K0 at 20 GPa for HMX) would feed the thermo-elastic heat back into
+    itself until the temperature runs away (measured: the small shot-912 bed's thermal
+    variant at level 3). One error naming the first material that does not."""
+    for name, m in materials.items():
+        if m.get("eos", "linear") == "linear":
+            if "expansion" not in m:
+                raise SceneError(f"materials.{name}.expansion", f"required by [{table}]")
+        elif not m.get("eos_gamma", 0.0) > 0.0:
+            raise SceneError(f"materials.{name}.eos_gamma", f"[{table}] needs the thermal "
+                             f"pressure of an equation of state: eos_gamma > 0 (got "
+                             f"{m.get('eos_gamma', 0.0)})")
+        elif "expansion" in m:
+            raise SceneError(f"materials.{name}.expansion", f"not with eos = \"{m['eos']}\" in "
+                             f"[{table}]: its thermal pressure is eos_gamma times its energy")
+
+
+class ThermalExpansion(Effect):
+    """Thermal strain alpha dT (isotropic, sigma_zz included) removed from the elastic strain
+    of a linear bulk; a material with an equation of state takes its thermal pressure from its
+    Gruneisen coefficient instead."""
+
+    name = "thermal_expansion"
+    requires = ("heat", "thermoelastic")
+
+    @classmethod
+    def check_scene(cls, resolved):
+        """Every material couples (:func:`check_coupled_materials`)."""
+        check_coupled_materials(resolved["materials"], cls.name)
 
     def setup(self, st, ctx):
         fill_column(st, ctx, ALPHA, "expansion")

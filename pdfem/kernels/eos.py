@@ -119,6 +119,15 @@ def reference_eta(k0, s, g, pr):
 
 
 @njit(cache=True)
+def point_compression(p, s0, s1, s3, e):
+    """The compression eta of a point with the Mie-Gruneisen form (module docstring): normal
+    stresses (s0, s1, s3), internal energy e per reference volume; the root of
+    p_r(eta) = p - Gamma0 e (reference_eta)."""
+    pn = -(s0 + s1 + s3) / 3.0
+    return reference_eta(p[BULK], p[EOS_S], p[EOS_G], pn - p[EOS_G] * e)
+
+
+@njit(cache=True)
 def gruneisen_row(p, s0, s1, s3, dv, e, q, out):
     """The parameter row ``out`` for a step of volumetric strain increment dv of a point with
     the Mie-Gruneisen form (module docstring): normal stresses (s0, s1, s3), internal energy

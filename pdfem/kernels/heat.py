@@ -25,7 +25,9 @@ from numba import njit
 
 from pdfem.kernels.broad_phase import element_corners
 from pdfem.kernels.element import ETA, GP, XI, _ip_grad
-from pdfem.kernels.params import ALPHA, COND, CP, RHO
+from pdfem.kernels.eos import point_compression
+from pdfem.kernels.material import softened
+from pdfem.kernels.params import ALPHA, COND, CP, EOS_G, RHO, SOFT_K
 from pdfem.kernels.stable import element_length
 
 
@@ -128,31 +130,81 @@ def kirchhoff_pressure(x, conn, sig, e0, e1, out):
         out[e] = _tau(x, conn, sig, e)
 
 
+@njit(cache=True)
+def element_areas(x, conn, e0, e1, out):
+    """out[e] = the area of element e in [e0, e1) (shoelace) [m^2]."""
+    for e in range(e0, e1):
+        a = 0.0
+        for i in range(4):
+            n = conn[e, i]
+            m = conn[e, (i + 1) % 4]
+            a += x[n, 0] * x[m, 1] - x[m, 0] * x[n, 1]
+        out[e] = 0.5 * a
+
+
+@njit(cache=True)
+def _eos_compression(p, sig, mst, e):
+    """The mean over the points of element e of their Mie-Gruneisen compression eta
+    (pdfem.kernels.eos.point_compression; the energy is the last value of a point's state)."""
+    nip = sig.shape[1]
+    last = mst.shape[2] - 1
+    c = 0.0
+    for q in range(nip):
+        c += point_compression(p, sig[e, q, 0], sig[e, q, 1], sig[e, q, 3],
+                               mst[e, q, last]) / nip
+    return c
+
+
+@njit(cache=True)
+def coupling_state(x, conn, emat, mat_params, sig, mst, eth, e0, e1, out):
+    """The state the thermo-elastic heat follows, for elements [e0, e1): p_e A_e
+    (:func:`_tau`) of a linear bulk, the mean compression eta of a Mie-Gruneisen material's
+    points (eos_gamma > 0; its row softened at the element temperature eth[e, 1] as in the
+    element update)."""
+    pbuf = np.empty(mat_params.shape[1])
+    for e in range(e0, e1):
+        p = mat_params[emat[e]]
+        if p[EOS_G] > 0.0:
+            if p[SOFT_K] != 0.0:
+                softened(p, eth[e, 1], pbuf)
+                p = pbuf
+            out[e] = _eos_compression(p, sig, mst, e)
+        else:
+            out[e] = _tau(x, conn, sig, e)
+
+
 # Columns of the per-element heat by mechanism (cumulative since t = 0) [J/m]
 H_PLASTIC = 0  # beta x plastic work
 H_VISCOUS = 1  # fraction x bulk-viscosity work
-H_THERMOELASTIC = 2  # 3 alpha T d(p A)
+H_THERMOELASTIC = 2  # 3 alpha T d(p A), or Gamma0 rho0 c T d(eta) A0 with an EOS
 H_FRICTION = 3  # fraction x frictional dissipation at the element's contacts
 H_CONDUCTED = 4  # net heat received across its contacts (conductance; sums to zero)
 NHEAT = 5
 
 
 @njit(cache=True)
-def element_heat(x, temp, conn, emat, mat_params, sig, ewp, ewp_prev, ewq, ewq_prev, tau_prev,
-                 beta, gamma, thermoelastic, e0, e1, out, eheat):
+def element_heat(x, temp, conn, emat, mat_params, sig, mst, eth, area_ref, ewp, ewp_prev, ewq,
+                 ewq_prev, tau_prev, beta, gamma, thermoelastic, e0, e1, out, eheat):
     """Heat [J/m] this step's sources put into each element e in [e0, e1): out[e] = ...
 
     beta (ewp[e] - ewp_prev[e])                 dissipation heating (plastic work, eq. 48)
-    3 alpha T_e (tau_e - tau_prev[e])           thermo-elastic coupling (when thermoelastic)
+    3 alpha T_e (tau_e - tau_prev[e])           thermo-elastic coupling of a linear bulk
+    Gamma0 rho0 c T_e (eta_e - tau_prev[e]) A0  thermo-elastic coupling of a Mie-Gruneisen
+                                                material (eos_gamma > 0)
     gamma (ewq[e] - ewq_prev[e])                viscous heating (bulk-viscosity work)
-    with T_e the mean nodal temperature and tau = p A (:func:`kirchhoff_pressure`, from the
-    stress just updated). For a small elastic change, tau - tau_prev = -K A d(eps_v,elastic)
-    + p dA, so this is eq. 48's -3 K alpha T dV with the elastic volume change, plus the
-    pressure's share that makes -3 alpha T p A the coupling's energy (see pdfem.effects.heat).
+    with T_e the mean nodal temperature, tau = p A (:func:`kirchhoff_pressure`, from the
+    stress just updated), eta_e the mean compression of the element's points and A0 =
+    area_ref[e] its reference area (:func:`coupling_state`). For a small elastic change,
+    tau - tau_prev = -K A d(eps_v,elastic) + p dA, so the first coupling is eq. 48's
+    -3 K alpha T dV with the elastic volume change, plus the pressure's share that makes
+    -3 alpha T p A the coupling's energy (see pdfem.effects.heat). The second is the
+    adiabatic heating dT = Gamma0 T d(eta) of the form's thermal pressure Gamma0 rho0 c dT,
+    its energy already in the stress work (its heat is the coupling's energy, negative).
     ewp_prev, ewq_prev and tau_prev are then set to the new values. beta = 0 skips the first
-    term, thermoelastic = False the second, gamma = 0 the third (their arrays may then be
-    empty). Each term is also added to its column of eheat[e] (H_PLASTIC, ...).
+    term, thermoelastic = False the couplings, gamma = 0 the viscous term (their arrays may
+    then be empty). Each term is also added to its column of eheat[e] (H_PLASTIC, ...).
     """
+    pbuf = np.empty(mat_params.shape[1])
     for e in range(e0, e1):
         h = 0.0
         if beta > 0.0:
@@ -161,14 +213,26 @@ def element_heat(x, temp, conn, emat, mat_params, sig, ewp, ewp_prev, ewq, ewq_p
             eheat[e, H_PLASTIC] += hp
             ewp_prev[e] = ewp[e]
         if thermoelastic:
-            tau = _tau(x, conn, sig, e)
             te = 0.0
             for i in range(4):
                 te += 0.25 * temp[conn[e, i]]
-            ht = 3.0 * mat_params[emat[e], ALPHA] * te * (tau - tau_prev[e])
+            p = mat_params[emat[e]]
+            if p[EOS_G] > 0.0:
+                # The adiabatic heat of the Mie-Gruneisen form's compression
+                cp = p[RHO] * p[CP]
+                if p[SOFT_K] != 0.0:
+                    softened(p, eth[e, 1], pbuf)
+                    p = pbuf
+                c = _eos_compression(p, sig, mst, e)
+                ht = p[EOS_G] * cp * te * (c - tau_prev[e]) * area_ref[e]
+                tau_prev[e] = c
+            else:
+                # The linear solid's: 3 alpha T d(p A)
+                tau = _tau(x, conn, sig, e)
+                ht = 3.0 * p[ALPHA] * te * (tau - tau_prev[e])
+                tau_prev[e] = tau
             h += ht
             eheat[e, H_THERMOELASTIC] += ht
-            tau_prev[e] = tau
         if gamma > 0.0:
             hv = gamma * (ewq[e] - ewq_prev[e])
             h += hv

@@ -105,7 +105,8 @@ MATERIAL_COMMON = {
     "conductivity": _nonneg("float", OPTIONAL, "thermal conductivity k (required by "
                             "[conduction])", "W/(m K)"),
     "expansion": _nonneg("float", OPTIONAL, "linear thermal expansion coefficient alpha "
-                         "(required by [thermal_expansion] and [thermoelastic])", "1/K"),
+                         "(required by [thermal_expansion] and [thermoelastic] with a linear "
+                         "bulk; not with an equation of state)", "1/K"),
     "softening": _nonneg("float", OPTIONAL, "K and G scale by 1 - softening (T - "
                          "heat.initial), at least 0.05 ([temperature_dependence])", "1/K"),
     "strength_softening": _nonneg("float", OPTIONAL, "cap A and C scale by 1 - "
@@ -439,13 +440,16 @@ SECTIONS = [
             "viscosity (the dissipation of a shock front narrower than the mesh) heats the "
             "element (needs [bulk_viscosity]).", VISCOUS_HEATING),
     Section("thermoelastic", "table", "Thermo-elastic coupling: heat 3 alpha T d(p A) of each "
-            "element (p its pressure, A its area: -3 K alpha T dV of the elastic volume change "
-            "plus the pressure's share); needs [thermal_expansion], every material needs "
-            "expansion and a linear bulk (eos = \"linear\": an equation of state has no "
-            "thermal pressure yet).", THERMOELASTIC),
+            "element of a linear bulk (p its pressure, A its area: -3 K alpha T dV of the "
+            "elastic volume change plus the pressure's share), Gamma0 rho0 c T d(eta) A0 of "
+            "an element with an equation of state (its compression eta, reference area A0: "
+            "the adiabatic heating of the Mie-Gruneisen form); needs [thermal_expansion]; "
+            "a material with a linear bulk needs expansion, one with eos = \"us_up\" needs "
+            "eos_gamma > 0 and no expansion.", THERMOELASTIC),
     Section("thermal_expansion", "table", "Isotropic thermal strain alpha dT in the stress "
-            "update; needs [thermoelastic], every material needs expansion and a linear bulk "
-            "(eos = \"linear\").",
+            "update of a linear bulk (an equation of state's thermal pressure is eos_gamma "
+            "times its points' energy); needs [thermoelastic], with the same rules for the "
+            "materials.",
             THERMAL_EXPANSION),
     Section("temperature_dependence", "table", "Moduli (softening) and cap strength "
             "(strength_softening) decrease linearly with temperature; at least one material "

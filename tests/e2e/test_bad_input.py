@@ -88,6 +88,13 @@ FILES = {
         d["materials"]["grain"].update(eos="us_up", eos_s=2.0, specific_heat=1000.0,
                                        expansion=1.0e-5),
         d.update(heat={}, thermoelastic={}, thermal_expansion={}))),
+    "no_expansion.toml": _good(lambda d: (
+        d["materials"]["grain"].update(specific_heat=1000.0),
+        d.update(heat={}, thermoelastic={}, thermal_expansion={}))),
+    "gamma_expansion.toml": _good(lambda d: (
+        d["materials"]["grain"].update(eos="us_up", eos_s=2.0, eos_gamma=1.0,
+                                       specific_heat=1000.0, expansion=1.0e-5),
+        d.update(heat={}, thermoelastic={}, thermal_expansion={}))),
     "huge.toml": _good(lambda d: d["domain"].update(box=[0.0, 0.0, 1.0e9, 0.006])),
     "effect.toml": _good(lambda d: d.update(viscosityy={"coefficient": 1.0})),
     "fast.toml": _good(lambda d: d.update(blocks=[{
@@ -241,7 +248,12 @@ CASES = {
                             "materials.grain.eos_gamma: must be < 2 eos_s = 3"),
     "run gamma negative": (["run", "gamma_negative.toml"], "materials.grain.eos_gamma: must be"),
     "run thermal expansion with an eos": (["run", "eos_thermal.toml"],
-                                          'materials.grain.eos: "us_up" has no thermal pressure'),
+                                          "materials.grain.eos_gamma: [thermoelastic] needs the "
+                                          "thermal pressure of an equation of state"),
+    "run coupling without expansion": (["run", "no_expansion.toml"],
+                                       "materials.grain.expansion: required by [thermoelastic]"),
+    "run expansion with a gruneisen eos": (["run", "gamma_expansion.toml"],
+                                           'materials.grain.expansion: not with eos = "us_up"'),
     "run huge": (["run", "huge.toml"], "domain.cell_size: the cell grid would have"),
     "run faster than light": (["run", "fast.toml"], "blocks[0].velocity: must be below"),
     "run unknown effect": (["run", "effect.toml"], "viscosityy: unknown table"),

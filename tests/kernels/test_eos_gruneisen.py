@@ -102,3 +102,40 @@ def test_heat_at_constant_volume_raises_the_pressure_by_gamma_times_it():
     eta = 1.0 - math.exp(dv)
     assert st[0] > 5.0e8 * (-dv) * (1.0 - eta)
     assert pressure(sig) == pytest.approx(p_ref(eta, gamma) + gamma * st[0], rel=1e-3)
+
+
+def test_the_thermoelastic_heat_follows_the_forms_isentrope_and_returns():
+    # [thermoelastic] on an element of the form: its compression heats it by
+    # dT = Gamma0 T d(eta), so T = T0 exp(Gamma0 eta) along any path (viscous heat in the
+    # point's energy moves p, not eta), and a closed cycle ends at T0
+    from pdfem.kernels.heat import NHEAT, coupling_state, element_heat
+
+    gamma, cp, t0, area = 1.1, 1000.0, 300.0, 1.0e-8
+    p = row(gamma)
+    p[P.CP] = cp
+    mat = p[None, :]
+    x = np.array([[0.0, 0.0], [1.0e-4, 0.0], [1.0e-4, 1.0e-4], [0.0, 1.0e-4]])
+    conn, emat = np.arange(4)[None, :], np.zeros(1, np.int32)
+    sig, st = np.zeros((1, 1, 4)), np.zeros((1, 1, 1))
+    eth, area_ref, temp = np.zeros((1, 3)), np.array([area]), np.full(4, t0)
+    tau_prev, out, eheat, none = np.zeros(1), np.zeros(1), np.zeros((1, NHEAT)), np.empty(0)
+    coupling_state(x, conn, emat, mat, sig, st, eth, 0, 1, tau_prev)
+    assert tau_prev[0] == 0.0
+    ends = []
+    for n in (300, 3000):
+        sig[:], st[:], temp[:], eheat[:], tau_prev[:] = 0.0, 0.0, t0, 0.0, 0.0
+        dvs = np.concatenate([np.full(n, math.log(0.7) / n), np.full(n, -math.log(0.7) / n)])
+        total = 0.0
+        for i, dv in enumerate(dvs):
+            step(p, sig[0, 0], st[0, 0], dv, q=2.0e8 if dv < 0.0 else 0.0)
+            element_heat(x, temp, conn, emat, mat, sig, st, eth, area_ref, none, none, none,
+                         none, tau_prev, 0.0, 0.0, True, 0, 1, out, eheat)
+            temp += out[0] / (RHO * cp * area)
+            total += dv
+            if i == n - 1:
+                assert temp[0] == pytest.approx(t0 * math.exp(gamma * 0.3), rel=2e-3)
+        # Heat since t = 0 (the coupling's energy, negative) is the capacity times the rise
+        assert eheat[0, 2] == pytest.approx(RHO * cp * area * (temp[0] - t0), rel=1e-12,
+                                            abs=1e-12)
+        ends.append(abs(temp[0] - t0))
+    assert ends[1] < 0.2 * ends[0] and ends[1] < 1.0e-3 * t0

@@ -21,7 +21,7 @@ import h5py
 import numpy as np
 
 from pdfem.effects.heat import MECHANISMS
-from pdfem.effects.thermal import nonlinear_bulk
+from pdfem.effects.thermal import without_thermal_pressure
 from pdfem.parallel.mpi import broadcast
 from pdfem.tools.study.accuracy import AccuracyStudy, Setting
 
@@ -34,7 +34,8 @@ COMPARED = (("mean", "mean"), ("p99", "99th percentile"), ("p99.9", "99.9th perc
 def thermal_variant(doc):
     """The scene dict with every heat effect it can have, when it has no [heat]: heat,
     conduction, dissipation heating, thermo-elastic coupling with thermal expansion when every
-    material's bulk is linear, and, where their owner is present, viscous heating
+    material has a thermal pressure (a linear bulk, or an equation of state with a Gruneisen
+    coefficient), and, where their owner is present, viscous heating
     ([bulk_viscosity]) and friction heating ([contact]). A scene with [heat] keeps its own
     heat effects. Either way a given output.fields gains element_temperature and the heat_*
     fields the census reads."""
@@ -48,9 +49,9 @@ def thermal_variant(doc):
         return out
     for name in ("heat", "conduction", "dissipation_heating"):
         out[name] = {}
-    # The thermo-elastic coupling needs every material's bulk linear (an equation of state
-    # has no thermal pressure: pdfem.effects.thermal.ThermalExpansion)
-    if nonlinear_bulk(out.get("materials", {})) is None:
+    # The thermo-elastic coupling needs every material's thermal pressure (a Hugoniot alone
+    # has none: pdfem.effects.thermal.check_coupled_materials)
+    if without_thermal_pressure(out.get("materials", {})) is None:
         out["thermoelastic"] = {}
         out["thermal_expansion"] = {}
     if "bulk_viscosity" in out:

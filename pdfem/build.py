@@ -160,21 +160,22 @@ def _dof_mask(dof):
     return np.array(["x" in dof, "y" in dof])
 
 
-def apply_bcs(batch, bcs, box, block_names, block_sets, nglobal_first_node):
+def apply_bcs(batch, bcs, box, blocks=None, first=None):
     """Set bcf/bcv of a batch's nodes from the resolved [[bc]] list.
 
-    Block node sets are local to each block; ``nglobal_first_node[i]`` is block i's first
-    node in the batch. Wall conditions apply to every node lying on the wall at t=0.
+    ``blocks`` (pdfem.setup.Blocks) finds a block condition's nodes, local to its block;
+    ``first[i]`` is block i's first node in the batch; a batch without blocks (None) takes
+    the wall conditions only. Wall conditions apply to every node lying on the wall at t=0.
     """
     x, bcf, bcv = batch.a["x"], batch.a["bcf"], batch.a["bcv"]
     tol = 1e-9 * max(box[2] - box[0], box[3] - box[1])
     for bc in bcs:
         # Select the nodes of this condition
         if "body" in bc:
-            if bc["body"] not in block_names:
+            if blocks is None or bc["body"] not in blocks.names:
                 continue
-            i = block_names.index(bc["body"])
-            nodes = block_sets[i][bc.get("nodes", "all")] + nglobal_first_node[i]
+            nodes = blocks.nodes(bc["body"], bc.get("nodes", "all")) + first[
+                blocks.index(bc["body"])]
         else:
             coord = {"left": (0, box[0]), "right": (0, box[2]), "bottom": (1, box[1]),
                      "top": (1, box[3])}[bc["wall"]]

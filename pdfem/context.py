@@ -22,9 +22,10 @@ class Context:
         # fills its own columns
         self.mat_params = sim.mat_params
         self.grid, self.skin = sim.grid, sim.skin
-        # Blocks (global bodies, stored first): their number, names and node sets
+        # Blocks (global bodies, stored first): their number, and their names and node sets
+        # (pdfem.setup.Blocks)
         self.nglobal = sim.nglobal
-        self.block_names, self.block_sets = sim.block_names, sim.block_sets
+        self.blocks = sim.blocks
         # Periodic sides: the node each block node moves with (-1: none; pdfem.build.tied_nodes)
         self.partner = sim.partner
         self.restarted = sim.restarted

@@ -25,17 +25,14 @@ class Drives:
     """The velocity conditions of a run that have a release time (blocks only)."""
 
     def __init__(self, sim):
-        r = sim.resolved
-        names = [b["name"] for b in r.get("blocks", [])]
-        ng = sim.layout.nbody - len(names)
+        blocks = sim.blocks
         self.items = []
-        for bc in r.get("bc", []):
+        for bc in sim.resolved.get("bc", []):
             if "release" not in bc:
                 continue
-            k = names.index(bc["body"])
             dofs = np.array([c for c in range(2) if "xy"[c] in bc["dof"]], np.int64)
-            self.items.append((ng + k, sim.block_sets[k][bc["nodes"]], dofs,
-                               np.asarray(bc["velocity"], float), bc["release"],
+            self.items.append((blocks.gid(bc["body"]), blocks.nodes(bc["body"], bc["nodes"]),
+                               dofs, np.asarray(bc["velocity"], float), bc["release"],
                                bc["ramp_down"]))
 
     def __len__(self):

@@ -93,15 +93,12 @@ class Gauges:
             self.sets = unpack_sets(saved, len(self.names), where)
             return
         self.sets = []
-        names = [b["name"] for b in r.get("blocks", [])]
-        ng = ctx.layout.nbody - len(names)
         for i, g in enumerate(r.get("gauges", [])):
             if "body" in g:
-                k = names.index(g["body"])
-                blk = r["blocks"][k]
+                blk = r["blocks"][ctx.blocks.index(g["body"])]
                 elems = (np.array([g["element"]], np.int64) if "element" in g else
                          block_elements(blk["nx"], blk["ny"], g["side"]))
-                gid = ng + k
+                gid = ctx.blocks.gid(g["body"])
             else:
                 gid, le = _locate(st, ctx, g["point"], f"{ctx.scene.name}: gauges[{i}]")
                 elems = np.array([le], np.int64)

@@ -26,13 +26,28 @@ RESTART_FC = Field("restart_contact_force", NODE, (2,), np.float64)
 
 
 class Blocks:
-    """The scene's blocks (global bodies, stored first on every rank): names, node sets."""
+    """The scene's blocks: global bodies, stored first on every rank and numbered after the
+    grains (gids from ``first_gid``), each with its named node sets (block-local indices:
+    all, bottom, top, left, right; pdfem.build.block_batch). The one way from a block's name
+    and a node set to its nodes."""
 
-    def __init__(self, names, sets):
-        self.names, self.sets = names, sets
+    def __init__(self, names, sets, first_gid):
+        self.names, self.sets, self.first_gid = names, sets, first_gid
 
     def __len__(self):
         return len(self.names)
+
+    def index(self, name):
+        """The block's position among the blocks, and in every rank's store."""
+        return self.names.index(name)
+
+    def gid(self, name):
+        """The block's global body id."""
+        return self.first_gid + self.index(name)
+
+    def nodes(self, name, which="all"):
+        """Block-local indices of the block's node set ``which``."""
+        return self.sets[self.index(name)][which]
 
 
 def initial_bodies(sim, scene, init_state):
@@ -58,10 +73,10 @@ def initial_bodies(sim, scene, init_state):
     specs = r.get("blocks", [])
     bbatch, bsets = build.block_batch(sim.fields, sim.nip, nst, specs, ng, sim.mat_ids,
                                       sim.grid.periodic_x)
-    blocks = Blocks([b["name"] for b in specs], bsets)
+    blocks = Blocks([b["name"] for b in specs], bsets, ng)
     first = np.concatenate(([0], np.cumsum(bbatch.a["nn"])[:-1])).astype(np.int64)
-    build.apply_bcs(bbatch, r.get("bc", []), sim.box, blocks.names, bsets, first)
-    build.apply_bcs(grains, [b for b in r.get("bc", []) if "wall" in b], sim.box, [], [], [])
+    build.apply_bcs(bbatch, r.get("bc", []), sim.box, blocks, first)
+    build.apply_bcs(grains, [b for b in r.get("bc", []) if "wall" in b], sim.box)
     batch = Batch.concat(sim.fields, [bbatch, grains])
     material_initial_state(batch.a["mst"], batch.a["emat"], sim.mat_params)
     if "elem_sig" in g:

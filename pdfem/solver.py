@@ -121,7 +121,7 @@ class Simulation:
         self.nst = nst
         # Set-up: the first state's bodies, from the scene or the checkpoint, on their owners
         store, self.owner, blocks = setup.initial_bodies(self, scene, init_state)
-        self.block_names, self.block_sets, self.nglobal = blocks.names, blocks.sets, len(blocks)
+        self.blocks, self.nglobal = blocks, len(blocks)
         # Periodic sides: each block's left and right node columns move as one
         self.partner = np.zeros(0, np.int64)
         if self.grid.periodic_x and self.nglobal:

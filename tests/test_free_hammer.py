@@ -41,7 +41,7 @@ def _momentum_y(sim):
 
 def _hammer_velocity(sim):
     s = sim.store
-    b = sim.block_names.index("hammer")
+    b = sim.blocks.index("hammer")
     i = slice(s.nstart[b], s.nstart[b] + s.nn[b])
     return float(np.sum(s.m[i] * s.v[i, 1]) / s.m[i].sum())
 

@@ -171,8 +171,8 @@ class Heat(Effect):
         """Fixed temperatures of [[thermal_bc]] on block node sets (global bodies)."""
         s = st.store
         for bc in ctx.resolved.get("thermal_bc", []):
-            i = ctx.block_names.index(bc["body"])
-            nodes = ctx.block_sets[i][bc["nodes"]] + s.nstart[i]
+            nodes = ctx.blocks.nodes(bc["body"], bc["nodes"]) + s.nstart[
+                ctx.blocks.index(bc["body"])]
             s.tfix[nodes] = 1
             s.tfixv[nodes] = bc["temperature"]
 

@@ -11,14 +11,12 @@ import tomllib
 
 import numpy as np
 
-from partition import partition
 from pdfem import build
 from pdfem.errors import InputError
 from pdfem.kernels.element_1pt import hourglass_reference
 from pdfem.kernels.element_measures import q4_lumped_mass
 from pdfem.kernels.material import material_initial_state
-from pdfem.parallel.exchange import owned_grain_cells
-from pdfem.parallel.mpi import array_sum
+from pdfem.parallel.owners import cell_owners, owned_cell_weights
 from pdfem.store import NODE, Batch, Field, Store
 
 # A restart's contact forces of the last step, carried with the nodes to their owners
@@ -59,7 +57,7 @@ def initial_bodies(sim, scene, init_state):
     ng = g["center"].shape[0]
     cells = sim.grid.cell_of(g["center"])
     weights = np.bincount(cells, minlength=sim.grid.ncell).astype(float)
-    owner = partition(r["domain"]["partition"], weights, sim.grid.nx, sim.grid.ny, comm.size)
+    owner = cell_owners(r["domain"]["partition"], weights, sim.grid, comm.size)
     mine = np.nonzero(owner[cells] == comm.rank)[0]
     nst = sim.nst
     grains = build.grain_batch(sim.fields, sim.nip, nst, r["element"]["level"],
@@ -119,11 +117,8 @@ def restart_bodies(sim, path):
         ck.batch.a[RESTART_FC.name] = ck.contact_force
     store = Store(fields, Batch(fields, ck.batch.a), ck.batch.nbody)
     # The partition of the checkpoint's grains: cell weights summed over the ranks
-    cells = owned_grain_cells(store, sim.grid, sim.nglobal)
-    weights = np.bincount(cells, minlength=sim.grid.ncell).astype(float)
-    array_sum(sim.comm, weights)
-    owner = partition(sim.resolved["domain"]["partition"], weights, sim.grid.nx, sim.grid.ny,
-                      sim.comm.size)
+    weights = owned_cell_weights(sim.comm, store, sim.grid, sim.nglobal)
+    owner = cell_owners(sim.resolved["domain"]["partition"], weights, sim.grid, sim.comm.size)
     return store, owner, ck
 
 

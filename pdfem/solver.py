@@ -13,7 +13,7 @@
 
 import numpy as np
 
-from partition import CellGrid, needs_rebalance, partition
+from partition import CellGrid, needs_rebalance
 from pdfem import build, setup
 from pdfem.context import Context
 from pdfem.drive import Drives
@@ -40,14 +40,14 @@ from pdfem.kernels.params import EOS_G
 from pdfem.kernels.stable import q4_stable_dt
 from pdfem.memory import trim
 from pdfem.mesh.quality import corner_jacobians
-from pdfem.parallel.exchange import cell_reach, owned_grain_cells, rebuild
+from pdfem.parallel.exchange import cell_reach, rebuild
 from pdfem.parallel.mpi import (
     allgather_objects,
     array_max,
     global_any,
     global_min,
-    global_sum_exact,
 )
+from pdfem.parallel.owners import cell_owners, owned_cell_weights
 from pdfem.state import State
 from pdfem.store import core_fields
 from pdfem.timers import Timers
@@ -297,14 +297,11 @@ class Simulation:
         if threshold <= 0.0 or self.comm.size == 1:
             return
         s = self.store
-        own = np.arange(self.nglobal, s.nb_own)
-        cells = owned_grain_cells(s, self.grid, self.nglobal)
-        w = np.bincount(cells, weights=s.ne[own], minlength=self.grid.ncell).astype(np.int64)
-        w = global_sum_exact(self.comm, w)
-        weights = w.astype(float)
+        weights = owned_cell_weights(self.comm, s, self.grid, self.nglobal,
+                                     s.ne[self.nglobal: s.nb_own])
         if needs_rebalance(weights, self.owner, self.comm.size, threshold):
-            self.owner = partition(self.resolved["domain"]["partition"], weights, self.grid.nx,
-                                   self.grid.ny, self.comm.size)
+            self.owner = cell_owners(self.resolved["domain"]["partition"], weights, self.grid,
+                                     self.comm.size)
             self.rebalances += 1
 
     def compute_forces(self):

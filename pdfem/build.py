@@ -12,14 +12,11 @@ from pdfem.kernels.cap import CAP_NST, cap_check_params
 from pdfem.kernels.integrate import NACC
 from pdfem.mesh.block import block_mesh
 from pdfem.mesh.grain import grain_mesh
+from pdfem.scene.cap import CAP_COLUMNS
 from pdfem.store import Batch
 
 # Scene names of the material models
 MODELS = {"elastic": P.ELASTIC, "cap": P.CAP}
-# Scene keys of the cap model -> parameter columns
-CAP_KEYS = {"A": P.CAP_A, "B": P.CAP_B, "C": P.CAP_C, "D": P.CAP_D, "R": P.CAP_R,
-            "W": P.CAP_W, "kappa0": P.CAP_KAPPA0, "tension_cutoff": P.CAP_T, "tol": P.CAP_TOL,
-            "relaxation_time": P.CAP_TAU}
 
 
 def material_table(materials):
@@ -33,7 +30,7 @@ def material_table(materials):
         if tbl.get("eos") == "us_up":
             table[i, P.EOS_S] = tbl["eos_s"]
             table[i, P.EOS_G] = tbl.get("eos_gamma", 0.0)
-        for key, col in CAP_KEYS.items():
+        for key, col in CAP_COLUMNS.items():
             if key in tbl:
                 table[i, col] = tbl[key]
     return table

@@ -23,6 +23,7 @@ from pdfem.kernels.cap import (
 )
 from pdfem.kernels.eos import eos_row
 from pdfem.scene import schema as S
+from pdfem.scene.cap import CAP_COLUMNS, CAP_OPTIONAL, envelope_apex, strength_rule
 
 COLUMNS = ("step", "exx", "eyy", "exy", "ezz", "sxx", "syy", "sxy", "szz", "I1", "sqrtJ2",
            "kappa", "epv", "wp")
@@ -31,11 +32,9 @@ NAMED_PATHS = ("uniaxial", "hydrostatic", "triaxial", "load-unload")
 MAX_INCREMENTS = 10**7
 INCREMENT_S = 3.0e-5
 
-# [materials.NAME] key -> parameter column, for model = "cap"
-CAP_KEYS = {"density": P.RHO, "bulk": P.BULK, "shear": P.SHEAR, "A": P.CAP_A, "B": P.CAP_B,
-            "C": P.CAP_C, "D": P.CAP_D, "R": P.CAP_R, "W": P.CAP_W, "kappa0": P.CAP_KAPPA0,
-            "tension_cutoff": P.CAP_T, "tol": P.CAP_TOL, "relaxation_time": P.CAP_TAU}
-CAP_OPTIONAL = ("tension_cutoff", "tol", "relaxation_time")
+# [materials.NAME] key -> parameter column, for model = "cap": the elastic moduli and the
+# cap's own (pdfem.scene.cap)
+CAP_KEYS = {"density": P.RHO, "bulk": P.BULK, "shear": P.SHEAR, **CAP_COLUMNS}
 # Keys a scene's cap material may hold that this isothermal driver does not use (thermal and
 # temperature-dependence keys): the scene schema's keys of the cap model less the ones above
 # The equation of state's keys, which the driver applies (pdfem.kernels.eos)
@@ -86,13 +85,13 @@ def cap_params_from_table(tbl, where="materials.NAME", strict=True):
     for key in ("B", "C"):
         if p[CAP_KEYS[key]] < 0.0:
             raise InputError(f"{where}.{key}: must be >= 0 (got {p[CAP_KEYS[key]]:g})")
-    if not p[P.CAP_C] < p[P.CAP_A]:
-        raise InputError(f"{where}.C: must be < A (got {p[P.CAP_C]:g} >= {p[P.CAP_A]:g})")
+    why = strength_rule(p[P.CAP_A], p[P.CAP_C])
+    if why:
+        raise InputError(f"{where}.C: {why}")
     if not 0.0 < p[P.CAP_W] < 1.0:
         raise InputError(f"{where}.W: must be in (0, 1) (got {p[P.CAP_W]:g})")
     if "tension_cutoff" not in tbl:
-        b, c = p[P.CAP_B], p[P.CAP_C]
-        p[P.CAP_T] = math.log(p[P.CAP_A] / c) / b if b > 0.0 and c > 0.0 else 0.0
+        p[P.CAP_T] = envelope_apex(p[P.CAP_A], p[P.CAP_B], p[P.CAP_C])
     if p[P.CAP_TAU] < 0.0:
         raise InputError(f"{where}.relaxation_time: must be >= 0 (got {p[P.CAP_TAU]:g})")
     if "tol" in tbl and not 0.0 < p[P.CAP_TOL] < 1e-2:

@@ -12,6 +12,7 @@ import re
 from pathlib import Path
 
 from pdfem.scene import schema as S
+from pdfem.scene.cap import envelope_apex, strength_rule
 from pdfem.scene.grains_file import read_grains_file
 from pdfem.scene.placement import check_geometry, grain_arrays
 from pdfem.scene.schedules import check_schedules
@@ -234,11 +235,11 @@ def _eos_rules(m, path):
 
 def _cap_rules(m, path):
     """C < A; tension cut-off defaults to the envelope apex ln(A/C)/B."""
-    if not m["C"] < m["A"]:
-        raise SceneError(f"{path}.C", f"must be < A = {show(m['A'])} (got {show(m['C'])})")
+    why = strength_rule(m["A"], m["C"])
+    if why:
+        raise SceneError(f"{path}.C", why)
     if "tension_cutoff" not in m:
-        apex = math.log(m["A"] / m["C"]) / m["B"] if m["B"] > 0 and m["C"] > 0 else 0.0
-        m["tension_cutoff"] = apex
+        m["tension_cutoff"] = envelope_apex(m["A"], m["B"], m["C"])
     # Keep the schema's key order in the resolved table
     order = list(S.MATERIAL_COMMON) + list(S.CAP)
     items = sorted(m.items(), key=lambda kv: order.index(kv[0]))

@@ -29,6 +29,9 @@ class Context:
         # Periodic sides: the node each block node moves with (-1: none; pdfem.build.tied_nodes)
         self.partner = sim.partner
         self.restarted = sim.restarted
+        # A restart's checkpoint state (its driver values: what set-up must take back as it
+        # was, such as the contact stiffness cap); empty for a run from the scene
+        self.saved = sim.checkpoint.state if sim.checkpoint is not None else {}
         # The temperature field's owner (the heat effect; None without [heat])
         self.heat = sim.heat
         # The scene and what it makes of a run: the global layout of bodies, nodes and

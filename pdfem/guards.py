@@ -13,8 +13,8 @@ at each energy sample). This module keeps what a failure needs:
   (:meth:`pdfem.solver.Simulation.restore`, exactly as a restart from a checkpoint would:
   ghosts rebuilt from the owned bodies, on any number of ranks) and either writes it as a
   checkpoint (``<run file>.ckpt.h5``) or retries from it with half the time step;
-- the ``cap_contact`` remedy is the contact's (:mod:`pdfem.effects.contact_cap`), applied once
-  at set-up.
+- the ``cap_contact`` remedy is the contact's (:mod:`pdfem.effects.contact_cap`), applied once by
+  its own set-up; an effect's set-up remedies (``Effect.remedies``) join the actions here.
 """
 
 

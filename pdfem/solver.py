@@ -20,7 +20,6 @@ from pdfem.drive import Drives
 from pdfem.effects import active_effects
 from pdfem.effects.base import hook_table
 from pdfem.effects.contact import check_contact_scene
-from pdfem.effects.contact_cap import contact_stiffness_cap
 from pdfem.energy import energy_floor, initial_strain_work, run_terms
 from pdfem.errors import SimulationError
 from pdfem.guards import Guards
@@ -145,7 +144,11 @@ class Simulation:
         self.minima = self.hooks["step_minimum"]
         self.drives = Drives(self)
         self.guards = Guards(r["guards"])
-        self._cap_contact(restart)
+        for eff in self.effects:
+            self.guards.actions.extend(eff.remedies)
+        # The contact stiffness cap of the cap_contact remedy, kept for a restart (None: none)
+        self.contact_cap = next((e.stiffness_cap for e in self.effects if e.name == "contact"),
+                                None)
         self.energy_floor = energy_floor(self.state, self.ctx)
         # The set-up's temporaries are freed: give their pages back to the OS
         trim()
@@ -186,18 +189,6 @@ class Simulation:
     fc = property(lambda self: self.state.fc, doc="Their contact part ((0, 2): no contact).")
     du = property(lambda self: self.state.du, doc="Position increments of the step [m].")
     kin = property(lambda self: self.state.kin, doc="Kinetic energy per body [J/m].")
-
-    def _cap_contact(self, restart):
-        """The cap_contact remedy (pdfem.effects.contact_cap); a restart reuses the
-        checkpoint's cap."""
-        self.contact_cap = None
-        if self.resolved["guards"]["cap_contact"] == "off":
-            return
-        contact = [e for e in self.effects if e.name == "contact"][0]
-        saved = self.checkpoint.state.get("contact_cap") if restart is not None else None
-        self.contact_cap, line = contact_stiffness_cap(self.state, self.ctx, contact, saved)
-        if line:
-            self.guards.actions.append(line)
 
     # ------------------------------------------------------------------ the step
     def step(self):

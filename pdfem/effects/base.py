@@ -55,6 +55,9 @@ class Effect:
 
     def __init__(self, table, scene):
         self.table = table
+        # The log lines of the remedies its set-up applied (pdfem.guards: a run logs them with
+        # the guards' own actions and keeps them in its summary)
+        self.remedies = []
 
     @classmethod
     def check_scene(cls, resolved):

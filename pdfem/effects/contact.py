@@ -19,6 +19,7 @@ import numpy as np
 from pdfem.build import joint_masses
 from pdfem.effects.base import Effect
 from pdfem.effects.contact_candidates import Candidates, lexorder
+from pdfem.effects.contact_cap import contact_stiffness_cap
 from pdfem.errors import InputError
 from pdfem.kernels import contact_law as L
 from pdfem.kernels.contact import (
@@ -143,6 +144,14 @@ class Contact(Effect):
 
     def setup(self, st, ctx):
         self.after_rebuild(st, ctx)
+        # The cap_contact remedy: laws no stiffer than the elements' initial stable step allows
+        # (pdfem.effects.contact_cap); a restart takes the cap its run started with
+        self.stiffness_cap = None
+        if ctx.resolved["guards"]["cap_contact"] != "off":
+            self.stiffness_cap, line = contact_stiffness_cap(st, ctx, self,
+                                                             ctx.saved.get("contact_cap"))
+            if line:
+                self.remedies.append(line)
 
     # ------------------------------------------------------------------ detection
     def after_rebuild(self, st, ctx):

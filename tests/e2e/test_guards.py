@@ -177,6 +177,29 @@ def test_contact_stiffness_cap_logs_and_allows_the_element_step(tmp_path):
     assert steps[1] * 20 < steps[0]
 
 
+def test_a_restart_keeps_the_contact_stiffness_cap(tmp_path):
+    # The contact's set-up takes the cap its run started with from the checkpoint (a cap
+    # recomputed from the compressed state would change the laws): a restart on 2 ranks
+    # continues the 1-rank run's frames and energies bit for bit
+    doc = collision(v=20.0, kn0=1e20, end=5e-7)
+    doc["guards"] = {"cap_contact": "element"}
+    doc["output"]["checkpoint_interval"] = 2.6e-7
+    write_scene(tmp_path / "c.toml", doc)
+    p = pdfem(["run", "c.toml", "-o", "a.h5", "--quiet"], tmp_path)
+    assert p.returncode == 0, p.stderr
+    p = pdfem(["run", "c.toml", "--restart", "a.h5.ckpt.h5", "-o", "b.h5"], tmp_path, ranks=2)
+    assert p.returncode == 0, p.stderr
+    assert "remedy cap_contact" not in p.stdout
+    a, b = datasets(tmp_path / "a.h5"), datasets(tmp_path / "b.h5")
+    nb = b["frames/time"].shape[0] - 1
+    assert nb >= 1
+    for k in ("frames/time", "frames/x", "frames/v", "frames/stress"):
+        assert np.array_equal(a[k][-nb:], b[k][1:]), k
+    for k in a:
+        if k.startswith("energy/"):
+            assert np.array_equal(a[k], b[k]), k
+
+
 def test_every_check_names_what_can_help():
     """Every check a run can fail ("check NAME: ..." in the sources) has its advice, and the
     advice splits what a restart may change from what needs a new run."""

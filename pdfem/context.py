@@ -32,8 +32,10 @@ class Context:
         # A restart's checkpoint state (its driver values: what set-up must take back as it
         # was, such as the contact stiffness cap); empty for a run from the scene
         self.saved = sim.checkpoint.state if sim.checkpoint is not None else {}
-        # The temperature field's owner (the heat effect; None without [heat])
+        # The temperature field's owner (the heat effect; None without [heat]) and the contact
+        # (None without [contact]): typed handles (pdfem.effects.find)
         self.heat = sim.heat
+        self.contact = sim.contact
         # The scene and what it makes of a run: the global layout of bodies, nodes and
         # elements (pdfem.build.Layout), the store's fields, integration points, the active
         # effects, the energy terms, whether contact forces exist

@@ -17,9 +17,11 @@ from partition import CellGrid, needs_rebalance
 from pdfem import build, setup
 from pdfem.context import Context
 from pdfem.drive import Drives
-from pdfem.effects import active_effects
+from pdfem.effects import active_effects, find
 from pdfem.effects.base import hook_table
-from pdfem.effects.contact import check_contact_scene
+from pdfem.effects.contact import Contact, check_contact_scene
+from pdfem.effects.damping import Damping
+from pdfem.effects.heat import Heat
 from pdfem.energy import energy_floor, initial_strain_work, run_terms
 from pdfem.errors import SimulationError
 from pdfem.guards import Guards
@@ -70,9 +72,11 @@ class Simulation:
         self.terms = run_terms(self.effects)
         # The temperature field's owner (None without [heat]): the handle the contact heat
         # and the diagnostics use
-        self.heat = next((e for e in self.effects if e.name == "heat"), None)
-        damping = [e for e in self.effects if e.name == "damping"]
-        self.gamma = damping[0].gamma if damping else 0.0
+        self.heat = find(self.effects, Heat)
+        # The contact (None without [contact]): its stiffness cap is kept for a restart
+        self.contact = find(self.effects, Contact)
+        damping = find(self.effects, Damping)
+        self.gamma = damping.gamma if damping is not None else 0.0
         self.mat_params = build.material_table(r["materials"])
         nst = build.check_materials(r["materials"], self.mat_params)
         el = r["element"]
@@ -147,8 +151,7 @@ class Simulation:
         for eff in self.effects:
             self.guards.actions.extend(eff.remedies)
         # The contact stiffness cap of the cap_contact remedy, kept for a restart (None: none)
-        self.contact_cap = next((e.stiffness_cap for e in self.effects if e.name == "contact"),
-                                None)
+        self.contact_cap = self.contact.stiffness_cap if self.contact is not None else None
         self.energy_floor = energy_floor(self.state, self.ctx)
         # The set-up's temporaries are freed: give their pages back to the OS
         trim()

@@ -102,6 +102,12 @@ def is_present(name, resolved):
     return REGISTRY[name].present(resolved)
 
 
+def find(effects, cls):
+    """The effect of class ``cls`` among ``effects`` (a run's active effects), or None: the
+    typed handle the stepper and io keep of an effect they call."""
+    return next((e for e in effects if isinstance(e, cls)), None)
+
+
 def active_effects(resolved, scene=None):
     """Construct the effects the scene asks for, in registry order."""
     return [cls(resolved.get(name, {}), scene) for name, cls in REGISTRY.items()

@@ -60,8 +60,7 @@ def frame_name(k):
 def contact_rows(st, ctx):
     """(n, NCOL) float rows of the active contacts this rank counts at the last evaluation
     (none before the first); ids are exact in float64 (below 2^53)."""
-    eff = next((e for e in ctx.effects if e.name == "contact"), None)
-    last = eff.last if eff is not None else None
+    last = ctx.contact.last if ctx.contact is not None else None
     if last is None:
         return np.zeros((0, NCOL))
     s = st.store

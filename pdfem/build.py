@@ -1,4 +1,5 @@
-"""Turn a scene into bodies: material table, grain and block meshes, boundary conditions.
+"""Turn a scene into bodies: material table, grain and block meshes (their boundary
+conditions: pdfem.boundary).
 
 Global ids: grains are 0..ng-1 in scene order, blocks follow in scene order. Every rank
 builds only the grains it owns at the start (and all blocks), so start-up is parallel too.
@@ -151,43 +152,6 @@ def tied_nodes(block_sets, first, nn):
         left, right = sets["left"] + f, sets["right"] + f
         partner[left], partner[right] = right, left
     return partner
-
-
-def _dof_mask(dof):
-    return np.array(["x" in dof, "y" in dof])
-
-
-def apply_bcs(batch, bcs, box, blocks=None, first=None):
-    """Set bcf/bcv of a batch's nodes from the resolved [[bc]] list.
-
-    ``blocks`` (pdfem.setup.Blocks) finds a block condition's nodes, local to its block;
-    ``first[i]`` is block i's first node in the batch; a batch without blocks (None) takes
-    the wall conditions only. Wall conditions apply to every node lying on the wall at t=0.
-    """
-    x, bcf, bcv = batch.a["x"], batch.a["bcf"], batch.a["bcv"]
-    tol = 1e-9 * max(box[2] - box[0], box[3] - box[1])
-    for bc in bcs:
-        # Select the nodes of this condition
-        if "body" in bc:
-            if blocks is None or bc["body"] not in blocks.names:
-                continue
-            nodes = blocks.nodes(bc["body"], bc.get("nodes", "all")) + first[
-                blocks.index(bc["body"])]
-        else:
-            coord = {"left": (0, box[0]), "right": (0, box[2]), "bottom": (1, box[1]),
-                     "top": (1, box[3])}[bc["wall"]]
-            nodes = np.nonzero(np.abs(x[:, coord[0]] - coord[1]) <= tol)[0]
-        # Constrain the chosen components
-        kind = bc["type"]
-        dof = "xy" if kind == "fixed" else bc["dof"]
-        mask = _dof_mask(dof)
-        for k in range(2):
-            if mask[k]:
-                bcf[nodes, k] = 2 if kind == "velocity" else 1
-                if kind == "velocity":
-                    bcv[nodes, k] = bc["velocity"][k]
-                    x_v = batch.a["v"]
-                    x_v[nodes, k] = bc["velocity"][k]
 
 
 class Layout:

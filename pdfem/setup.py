@@ -12,6 +12,7 @@ import tomllib
 import numpy as np
 
 from pdfem import build
+from pdfem.boundary import BoundaryConditions
 from pdfem.errors import InputError
 from pdfem.kernels.element_1pt import hourglass_reference
 from pdfem.kernels.element_measures import q4_lumped_mass
@@ -49,9 +50,10 @@ class Blocks:
 
 
 def initial_bodies(sim, scene, init_state):
-    """(store, cell owners, :class:`Blocks`): the grains this rank owns at t = 0 (by the
-    partition of the grain centres' cells) and every block, meshed, with boundary conditions,
-    material state and lumped mass; ``init_state(sim, store)``, when given, edits them."""
+    """(store, cell owners, :class:`Blocks`, the run's pdfem.boundary.BoundaryConditions): the
+    grains this rank owns at t = 0 (by the partition of the grain centres' cells) and every
+    block, meshed, with boundary conditions, material state and lumped mass;
+    ``init_state(sim, store)``, when given, edits them."""
     comm, r = sim.comm, sim.resolved
     g = scene.grains
     ng = g["center"].shape[0]
@@ -73,8 +75,9 @@ def initial_bodies(sim, scene, init_state):
                                       sim.grid.periodic_x)
     blocks = Blocks([b["name"] for b in specs], bsets, ng)
     first = np.concatenate(([0], np.cumsum(bbatch.a["nn"])[:-1])).astype(np.int64)
-    build.apply_bcs(bbatch, r.get("bc", []), sim.box, blocks, first)
-    build.apply_bcs(grains, [b for b in r.get("bc", []) if "wall" in b], sim.box)
+    bcs = BoundaryConditions(r.get("bc", []), sim.box, blocks)
+    bcs.set_on_blocks(bbatch, first)
+    bcs.set_on_grains(grains)
     batch = Batch.concat(sim.fields, [bbatch, grains])
     material_initial_state(batch.a["mst"], batch.a["emat"], sim.mat_params)
     if "elem_sig" in g:
@@ -86,7 +89,7 @@ def initial_bodies(sim, scene, init_state):
     # The 1-point rule's hourglass modes are measured from this configuration
     if sim.nip == 1:
         hourglass_reference(store.x, store.conn, sim.hg_coef, 0, store.ne_own, store.hgref)
-    return store, owner, blocks
+    return store, owner, blocks, bcs
 
 
 def bed_stress(batch, g, mine, e0):

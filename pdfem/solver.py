@@ -16,7 +16,6 @@ import numpy as np
 from partition import CellGrid, needs_rebalance
 from pdfem import build, setup
 from pdfem.context import Context
-from pdfem.drive import Drives
 from pdfem.effects import active_effects, find
 from pdfem.effects.base import hook_table
 from pdfem.effects.contact import Contact, check_contact_scene
@@ -123,7 +122,7 @@ class Simulation:
         self.mat_ids = {name: i for i, name in enumerate(r["materials"])}
         self.nst = nst
         # Set-up: the first state's bodies, from the scene or the checkpoint, on their owners
-        store, self.owner, blocks = setup.initial_bodies(self, scene, init_state)
+        store, self.owner, blocks, self.bcs = setup.initial_bodies(self, scene, init_state)
         self.blocks, self.nglobal = blocks, len(blocks)
         # Periodic sides: each block's left and right node columns move as one
         self.partner = np.zeros(0, np.int64)
@@ -146,7 +145,6 @@ class Simulation:
         # The effects that use each step hook, listed once
         self.hooks = hook_table(self.effects)
         self.minima = self.hooks["step_minimum"]
-        self.drives = Drives(self)
         self.guards = Guards(r["guards"])
         for eff in self.effects:
             self.guards.actions.extend(eff.remedies)
@@ -421,8 +419,8 @@ class Simulation:
         """Eq. 68 with the average of the two half steps; BCs, damping, kinetic energy."""
         s = self.store
         dt_avg = 0.5 * (self.dt_prev + self.dt)
-        if len(self.drives):
-            self.drives.apply(self, self.t, self.t + self.dt)
+        if self.bcs.releases:
+            self.bcs.apply(self.store, self.t, self.t + self.dt)
         with self.timers.phase("integration"):
             advance_velocities(s.v, self.f, s.m, s.bcf, s.bcv, self.gamma, dt_avg, s.nn_own,
                                s.node_body, s.acc, self.kin[: s.nb_own], first, self.fc,

@@ -1,11 +1,11 @@
-"""A driven body brought to rest and released (pdfem.drive): the profile, the integrator's
+"""A driven body brought to rest and released (pdfem.boundary): the profile, the integrator's
 velocities under it, the freed nodes, and the work its reaction does."""
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
-from pdfem.drive import factor
+from pdfem.boundary import factor
 from pdfem.energy import global_terms
 from pdfem.scene import parse_scene
 from pdfem.solver import Simulation

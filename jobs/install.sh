@@ -22,7 +22,7 @@ fi
 . "$VENV/bin/activate"
 python -m pip install -q --upgrade pip >/dev/null
 python -m pip install -q mpi4py numpy numba meshio pytest pytest-mpi hypothesis \
-  matplotlib ruff "setuptools>=77" "cython>=3" pkgconfig wheel
+  matplotlib ruff mypy "setuptools>=77" "cython>=3" pkgconfig wheel
 
 # h5py against parallel HDF5 (no build isolation: see docs/user/running.md, Install)
 if ! python -c "import h5py, sys; sys.exit(0 if h5py.get_config().mpi else 1)" 2>/dev/null; then

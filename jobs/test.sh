@@ -7,5 +7,7 @@ bash jobs/install.sh
 . .venv/bin/activate
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 ruff check pdfem partition tests
+# The type hints of the modules listed in pyproject.toml ([tool.mypy])
+python -m mypy
 python -m pytest -q -p no:cacheprovider --durations=30 "$@"
 timeout 900 bash jobs/mpirun.sh -n 2 python -m pytest -q -p no:cacheprovider --with-mpi tests/mpi

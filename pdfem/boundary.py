@@ -16,10 +16,18 @@ last interval before the release brings the body exactly to rest; the reaction's
 accounted by the integrator as for any velocity condition.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
+if TYPE_CHECKING:
+    from pdfem.setup import Blocks
+    from pdfem.store import Batch, Store
 
-def factor(t, release, ramp):
+
+def factor(t: float, release: float, ramp: float) -> float:
     """Fraction of the prescribed velocity at time t (1 before the ramp, 0 from release)."""
     if t >= release:
         return 0.0
@@ -28,7 +36,7 @@ def factor(t, release, ramp):
     return 1.0
 
 
-def _dof_mask(dof):
+def _dof_mask(dof: str) -> np.ndarray:
     return np.array(["x" in dof, "y" in dof])
 
 
@@ -37,11 +45,11 @@ class BoundaryConditions:
     and values of the first state's nodes (:meth:`set_on_blocks`, :meth:`set_on_grains`)
     and the release schedule of the releasing conditions (:meth:`apply`)."""
 
-    def __init__(self, bcs, box, blocks):
+    def __init__(self, bcs: list[dict[str, Any]], box: list[float], blocks: Blocks) -> None:
         self.bcs, self.box, self.blocks = list(bcs), box, blocks
         # The conditions with a release time (blocks only): body gid, block-local nodes,
         # components, velocity, release time, ramp
-        self.releases = []
+        self.releases: list[tuple[int, np.ndarray, np.ndarray, np.ndarray, float, float]] = []
         for bc in self.bcs:
             if "release" not in bc:
                 continue
@@ -50,22 +58,23 @@ class BoundaryConditions:
                                   dofs, np.asarray(bc["velocity"], float), bc["release"],
                                   bc["ramp_down"]))
 
-    def set_on_blocks(self, batch, first):
+    def set_on_blocks(self, batch: Batch, first: np.ndarray) -> None:
         """Flags, values and starting velocities of the blocks' nodes (a batch of every
         block, block i's first node at first[i]): every condition."""
         self._set(batch, self.bcs, first)
 
-    def set_on_grains(self, batch):
+    def set_on_grains(self, batch: Batch) -> None:
         """The same for a batch of grains: the wall conditions only."""
         self._set(batch, [bc for bc in self.bcs if "wall" in bc], None)
 
-    def _set(self, batch, bcs, first):
+    def _set(self, batch: Batch, bcs: list[dict[str, Any]], first: np.ndarray | None) -> None:
         x, bcf, bcv, v = batch.a["x"], batch.a["bcf"], batch.a["bcv"], batch.a["v"]
         box = self.box
         tol = 1e-9 * max(box[2] - box[0], box[3] - box[1])
         for bc in bcs:
             # Select the nodes of this condition
             if "body" in bc:
+                assert first is not None, "a block condition on a batch without blocks"
                 name = bc["body"]
                 nodes = self.blocks.nodes(name, bc.get("nodes", "all")) + first[
                     self.blocks.index(name)]
@@ -83,7 +92,7 @@ class BoundaryConditions:
                         bcv[nodes, k] = bc["velocity"][k]
                         v[nodes, k] = bc["velocity"][k]
 
-    def apply(self, store, t0, t1):
+    def apply(self, store: Store, t0: float, t1: float) -> None:
         """Set the prescribed velocities of the half step from t0 to t1 (the profile at t1),
         or free the nodes when it starts at or after the release."""
         s = store

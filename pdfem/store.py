@@ -9,6 +9,7 @@ of ranks. A body's whole state travels as a :class:`Batch` when it migrates.
 """
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -125,6 +126,10 @@ class Store:
     ``nb_own``/``nn_own``/``ne_own`` count the global and owned bodies, nodes, elements: the
     ranges kernels update. Everything past them is ghost data refreshed by the halo.
     """
+
+    if TYPE_CHECKING:
+        # The field arrays are set by name (store.x, store.sig ...): what a checker sees
+        def __getattr__(self, name: str) -> np.ndarray: ...
 
     def __init__(self, fields, batch, nb_own):
         self.fields = fields

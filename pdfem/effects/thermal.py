@@ -70,15 +70,6 @@ class Thermoelastic(Effect):
         check_coupled_materials(resolved["materials"], cls.name)
 
 
-def without_thermal_pressure(materials):
-    """The name of the first material (a dict of name -> table, resolved or as written) with
-    an equation of state and no Gruneisen coefficient, or None: such a material has no thermal
-    pressure for the thermo-elastic coupling (:func:`check_coupled_materials`)."""
-    return next((name for name, m in materials.items()
-                 if m.get("eos", "linear") != "linear" and not m.get("eos_gamma", 0.0) > 0.0),
-                None)
-
-
 def check_coupled_materials(materials, table):
     """The materials of a thermo-elastic coupling (a dict of name -> resolved table): a linear
     bulk needs its expansion alpha (thermal pressure 3 alpha K); an equation of state needs
@@ -96,8 +87,14 @@ def check_coupled_materials(materials, table):
                              f"pressure of an equation of state: eos_gamma > 0 (got "
                              f"{m.get('eos_gamma', 0.0)})")
         elif "expansion" in m:
+            implied = ""
+            if all(k in m for k in ("bulk", "density", "specific_heat")):
+                g = 3.0 * m["expansion"] * m["bulk"] / (m["density"] * m["specific_heat"])
+                implied = (f"; 3 alpha bulk / (density specific_heat) = {g:.3g} is the Gamma0 "
+                           "it implies")
             raise SceneError(f"materials.{name}.expansion", f"not with eos = \"{m['eos']}\" in "
-                             f"[{table}]: its thermal pressure is eos_gamma times its energy")
+                             f"[{table}]: its thermal pressure is eos_gamma times its energy "
+                             f"(remove expansion{implied})")
 
 
 class ThermalExpansion(Effect):

@@ -21,7 +21,8 @@ import h5py
 import numpy as np
 
 from pdfem.effects.heat import MECHANISMS
-from pdfem.effects.thermal import without_thermal_pressure
+from pdfem.effects.thermal import check_coupled_materials
+from pdfem.errors import SceneError
 from pdfem.parallel.mpi import broadcast
 from pdfem.tools.study.accuracy import AccuracyStudy, Setting
 
@@ -49,9 +50,14 @@ def thermal_variant(doc):
         return out
     for name in ("heat", "conduction", "dissipation_heating"):
         out[name] = {}
-    # The thermo-elastic coupling needs every material's thermal pressure (a Hugoniot alone
-    # has none: pdfem.effects.thermal.check_coupled_materials)
-    if without_thermal_pressure(out.get("materials", {})) is None:
+    # The thermo-elastic coupling where every material can take it (a linear bulk with its
+    # expansion, an equation of state with its Gruneisen coefficient and no expansion:
+    # pdfem.effects.thermal.check_coupled_materials)
+    try:
+        check_coupled_materials(out.get("materials", {}), "thermoelastic")
+    except SceneError:
+        pass
+    else:
         out["thermoelastic"] = {}
         out["thermal_expansion"] = {}
     if "bulk_viscosity" in out:

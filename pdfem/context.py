@@ -3,12 +3,12 @@
 Every hook of an effect (:mod:`pdfem.effects.base`), the energy balance (:mod:`pdfem.energy`),
 the gauges and io's writers receive the state they work on (:class:`pdfem.state.State`: the
 bodies, the time, the per-step arrays) and a :class:`Context`: the communicator, the timers,
-the scene, the materials' parameter table, the cell grid with its skin and the present cell
-reach, the blocks, the global layout of bodies, the run's effects and energy terms, the
-handle of the temperature field's owner and :meth:`Context.fail` to report a failed check.
-The stepper (:class:`pdfem.solver.Simulation`) makes one at set-up; what it changes during a
-run (the reach at a rebuild, time.safety under the time-step remedy) the context reads from
-it. Nothing here writes the state.
+the scene, the materials' parameter table, the cell grid with its skin, the blocks, the global
+layout of bodies, the run's effects and energy terms, and the handles of the temperature
+field's owner and of the contact. The stepper (:class:`pdfem.solver.Simulation`) makes one at
+set-up, and nothing in it changes during a run: what does (the cell reach at a rebuild,
+time.safety under the time-step remedy, a failed check) is the state's. Nothing here writes
+the state.
 """
 
 
@@ -16,7 +16,6 @@ class Context:
     """The run's context of a stepper ``sim`` (see the module docstring)."""
 
     def __init__(self, sim):
-        self._sim = sim
         self.comm, self.timers, self.resolved = sim.comm, sim.timers, sim.resolved
         # Material parameters, one row per material (pdfem.kernels.params); an effect's set-up
         # fills its own columns
@@ -45,17 +44,3 @@ class Context:
         self.hg_model = sim.hg_model
         self.effects, self.effect_names, self.terms = sim.effects, sim.effect_names, sim.terms
         self.has_contact = sim.has_contact
-
-    @property
-    def reach(self):
-        """Cells the contact search reaches around a grain's cell (set at each rebuild)."""
-        return self._sim.reach
-
-    @property
-    def safety(self):
-        """The present time.safety (the time-step remedy halves it)."""
-        return self._sim.safety
-
-    def fail(self, msg):
-        """Record a failed check; every rank stops at the end of the step."""
-        self._sim.fail(msg)

@@ -63,7 +63,6 @@ class Simulation:
         r = scene.resolved
         self.scene, self.comm, self.resolved = scene, comm, r
         self.timers = Timers()
-        self._fail_msg = ""
         check_contact_scene(r)
         self.effects = active_effects(r, scene)
         self.effect_names = [e.name for e in self.effects]
@@ -109,7 +108,7 @@ class Simulation:
         self.box = tuple(dom["box"])
         self.grid = CellGrid(self.box, dom["cell_size"], dom["periodic"] == "x")
         self.skin = dom["skin"]
-        self.safety, self.t_end = tm["safety"], tm["end"]
+        self.t_end = tm["end"]
         self.dt_max, self.dt_min, self.max_steps = tm["dt_max"], tm["dt_min"], tm["max_steps"]
         self.layout = build.Layout(scene.grains["center"].shape[0], el["level"],
                                    r.get("blocks", []), el["mesh"])
@@ -130,14 +129,18 @@ class Simulation:
             self.partner = build.tied_nodes(blocks.sets, store.nstart[: self.nglobal],
                                             store.nn_global)
         with self.timers.phase("migration"):
-            store, self.halo = self.rebuild(store)
+            store, self.halo, reach = self.rebuild(store)
         self.checkpoint = None
         if restart is not None:
             store, self.owner, self.checkpoint = setup.restart_bodies(self, restart)
             with self.timers.phase("migration"):
-                store, self.halo = self.rebuild(store)
+                store, self.halo, reach = self.rebuild(store)
             store = setup.drop_restart_forces(store, self.fields, self.checkpoint)
-        self.state = State(store, self.has_contact)
+        safety = tm["safety"]
+        if restart is not None:
+            # A time step the remedy halved stays halved unless the scene asks for less
+            safety = min(safety, self.checkpoint.state.get("safety", safety))
+        self.state = State(store, self.has_contact, safety, reach)
         # What the effects' hooks read besides the state
         self.ctx = Context(self)
         for eff in self.effects:
@@ -153,14 +156,11 @@ class Simulation:
         self.energy_floor = energy_floor(self.state, self.ctx)
         # The set-up's temporaries are freed: give their pages back to the OS
         trim()
-        self._fail_msg = ""
         st = self.state
         if restart is not None:
             # Continue exactly where the checkpoint stopped
             ck = self.checkpoint.state
             st.t, st.nstep, st.dt, st.dt_prev = ck["t"], ck["nstep"], ck["dt"], ck["dt_prev"]
-            # A time step the remedy halved stays halved unless the scene asks for less
-            self.safety = min(self.safety, ck.get("safety", self.safety))
             self.guards.retries_left = min(self.guards.retries,
                                            ck.get("dt_retries_left", self.guards.retries))
             # The contact forces of the step before, for a frame written at the restart
@@ -183,6 +183,8 @@ class Simulation:
     # this stepper, is the one that moves them)
     store = property(lambda self: self.state.store, doc="The bodies (pdfem.store.Store).")
     t = property(lambda self: self.state.t, doc="Time [s].")
+    safety = property(lambda self: self.state.safety, doc="time.safety as the remedy left it.")
+    reach = property(lambda self: self.state.reach, doc="Cell reach of the last rebuild.")
     dt = property(lambda self: self.state.dt, doc="Length of the next step [s].")
     dt_prev = property(lambda self: self.state.dt_prev, doc="Length of the last step [s].")
     nstep = property(lambda self: self.state.nstep, doc="Steps taken.")
@@ -220,7 +222,7 @@ class Simulation:
         if self.rebuild_next:
             with self.timers.phase("migration"):
                 self._rebalance()
-                store, self.halo = self.rebuild(st.store)
+                store, self.halo, st.reach = self.rebuild(st.store)
             st.new_store(store)
             for eff in self.effects:
                 eff.after_rebuild(st, self.ctx)
@@ -238,12 +240,12 @@ class Simulation:
         self.owner = last.owner.copy()
 
         def ghosts(store):
-            store, self.halo = self.rebuild(store)
-            return store
+            store, self.halo, reach = self.rebuild(store)
+            return store, reach
 
         with self.timers.phase("migration"):
-            self.state = st = State.from_snapshot(last.state, self.has_contact, ghosts)
-        self._fail_msg = ""
+            self.state = st = State.from_snapshot(last.state, self.has_contact, ghosts,
+                                                  self.state.safety)
         self.stop_requested = False
         for eff in self.effects:
             eff.after_rebuild(st, self.ctx)
@@ -251,9 +253,10 @@ class Simulation:
 
     def halve_step(self):
         """The time-step remedy: time step and time.safety halved; returns the old safety."""
-        old = self.safety
-        self.safety *= 0.5
-        self.state.dt *= 0.5
+        st = self.state
+        old = st.safety
+        st.safety *= 0.5
+        st.dt *= 0.5
         return old
 
     def request_stop(self):
@@ -270,16 +273,17 @@ class Simulation:
 
     def rebuild(self, store):
         """Migrate grains to their cells' owners and rebuild the ghosts of a ``store``, with
-        the cell reach of its grains (collective); returns (store, halo). The reach is kept
-        for the contact candidates (:func:`pdfem.parallel.exchange.cell_reach`)."""
-        self.reach, wide = cell_reach(self.comm, store, self.grid, self.nglobal, self.skin)
+        the cell reach of its grains (collective); returns (store, halo, reach): the reach is
+        the state's, for the contact candidates (:func:`pdfem.parallel.exchange.cell_reach`)."""
+        reach, wide = cell_reach(self.comm, store, self.grid, self.nglobal, self.skin)
         # Periodic sides: no grain may reach round the box to itself (a pair that meets
         # through both sides is a failed check of the contact detection)
         if self.grid.periodic_x and not wide + self.skin < self.grid.period:
             raise SimulationError(f"a grain {wide:.4g} m wide with the skin {self.skin:.4g} m "
                                   f"spans the box's width {self.grid.period:.4g} m: with "
                                   "periodic sides it would meet itself; widen domain.box")
-        return rebuild(self.comm, store, self.grid, self.owner, self.nglobal, self.reach)
+        store, halo = rebuild(self.comm, store, self.grid, self.owner, self.nglobal, reach)
+        return store, halo, reach
 
     def _rebalance(self):
         """At a rebuild: new cell owners when the element-count load of the ranks is more
@@ -363,18 +367,19 @@ class Simulation:
             d = eff.stable_dt(self.state, self.ctx)
             if d < dt_loc:
                 dt_loc, limiter = d, eff
-        if not dt_loc > self.dt_min and not self._fail_msg:
+        st = self.state
+        if not dt_loc > self.dt_min and not st.failure:
             if not isinstance(limiter, str):
                 limiter = limiter.dt_limiter(self.state, self.ctx, dt_loc)
             self.fail(f"check time step: the stable dt {dt_loc:.3e} s (limited by {limiter}) is "
                       f"below time.dt_min {self.dt_min:.3e} s")
         # Whether the next step's position update may move a grain node half the skin: the
         # next step is at most this rank's limit, so a bound decides before the reduction
-        dt_up = min(self.safety * dt_loc, self.dt_max)
+        dt_up = min(st.safety * dt_loc, self.dt_max)
         ahead = self._moves_half_skin(dt_up, 0.5 * (self.dt_prev + dt_up))
         # One reduction: the step, the fail, stop, checkpoint and rebuild flags, the effects'
         # minima
-        red = np.array([-dt_loc, 1.0 if self._fail_msg else 0.0, self.local_stop,
+        red = np.array([-dt_loc, 1.0 if st.failure else 0.0, self.local_stop,
                         self.local_ckpt, float(ahead)]
                        + [-e.step_minimum(self.state, self.ctx) for e in self.minima])
         red = array_max(self.comm, red)
@@ -385,11 +390,11 @@ class Simulation:
         self.checkpoint_requested = self.checkpoint_requested or red[3] > 0
         self.local_ckpt = 0.0
         if red[1] > 0:
-            msgs = [m for m in allgather_objects(self.comm, self._fail_msg) if m]
+            msgs = [m for m in allgather_objects(self.comm, st.failure) if m]
             raise SimulationError(f"step {self.nstep}, t={self.t:.6e} s: {msgs[0]}")
         dt_stable = -red[0]
         # No clipping to output times: an abrupt change of dt would spoil the energy identity
-        return min(self.safety * dt_stable, self.dt_max)
+        return min(st.safety * dt_stable, self.dt_max)
 
     def _moves_half_skin(self, dt_next, dt_avg):
         """This rank's bound: may the next position update move an owned node half the skin
@@ -411,9 +416,9 @@ class Simulation:
                                global_min(self.comm, e.step_minimum(self.state, self.ctx)))
 
     def fail(self, msg):
-        """Record a failed check; all ranks stop together at the end of the step."""
-        if not self._fail_msg:
-            self._fail_msg = msg
+        """Record a failed check in the state; all ranks stop together at the end of the
+        step."""
+        self.state.fail(msg)
 
     def advance_velocities(self, first=False):
         """Eq. 68 with the average of the two half steps; BCs, damping, kinetic energy."""

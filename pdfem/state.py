@@ -2,9 +2,11 @@
 
 A :class:`State` is what the stepper (:class:`pdfem.solver.Simulation`) changes from one step
 to the next and nothing else: the store of bodies (owned, global and ghost), the time t, the
-step count, the lengths of the last and the next step, and the per-step arrays sized to the
+step count, the lengths of the last and the next step, the per-step arrays sized to the
 store (nodal forces f, their contact part fc, the step's position increments du and the
-bodies' kinetic energies kin). The per-step arrays are made in one place,
+bodies' kinetic energies kin), the cell reach of the last rebuild (what the contact search
+reaches), time.safety as the time-step remedy left it, and the step's pending failure (the
+first failed check of this rank, :meth:`State.fail`). The per-step arrays are made in one place,
 :meth:`State.fresh_arrays`, after set-up, a rebuild or a rollback. The stepper writes the
 state; effects, guards and io read it (and add into the force arrays in their hooks).
 
@@ -37,13 +39,24 @@ class State:
     (0, 2), which the integrator reads as "no contact work to account").
     """
 
-    def __init__(self, store, contact):
+    def __init__(self, store, contact, safety=1.0, reach=1):
         self.contact = contact
         self.store = store
         self.t, self.nstep = 0.0, 0
         # No step has a length before the first next_dt: set-up evaluates forces at dt = 0
         self.dt = self.dt_prev = 0.0
+        # The step's factor on the stable step, and the cells the contact search reaches
+        # around a grain's cell (set at each rebuild: pdfem.parallel.exchange.cell_reach)
+        self.safety, self.reach = safety, reach
+        # The first failed check of the step on this rank ("": none)
+        self.failure = ""
         self.fresh_arrays()
+
+    def fail(self, msg):
+        """Record a failed check (the first of the step counts); every rank stops at the end
+        of the step (pdfem.solver.Simulation.next_dt)."""
+        if not self.failure:
+            self.failure = msg
 
     def fresh_arrays(self):
         """The per-step arrays sized to the store, zeroed: forces f, contact forces fc, step
@@ -64,9 +77,12 @@ class State:
         return Snapshot(self)
 
     @classmethod
-    def from_snapshot(cls, snap, contact, rebuild):
+    def from_snapshot(cls, snap, contact, rebuild, safety):
         """The state of a snapshot: its owned bodies with the ghosts ``rebuild`` (a function
-        of the owned store) makes, its time and step lengths, per-step arrays fresh."""
-        st = cls(rebuild(Store(snap.fields, snap.batch, snap.nb_own)), contact)
+        of the owned store returning the store with its ghosts and the cell reach) makes, its
+        time and step lengths, per-step arrays fresh, no failure; ``safety`` the present one
+        (a rollback keeps what the remedy set)."""
+        store, reach = rebuild(Store(snap.fields, snap.batch, snap.nb_own))
+        st = cls(store, contact, safety, reach)
         st.t, st.nstep, st.dt, st.dt_prev = snap.t, snap.nstep, snap.dt, snap.dt_prev
         return st

@@ -30,7 +30,7 @@ def _stretched_pair(tmp_path):
 def test_grains_wider_than_the_cells_stay_candidates(tmp_path):
     sim = _stretched_pair(tmp_path)
     assert sim.reach == 1
-    store, sim.halo = sim.rebuild(sim.store)
+    store, sim.halo, sim.state.reach = sim.rebuild(sim.store)
     sim.state.new_store(store)
     contact = next(e for e in sim.effects if e.name == "contact")
     contact.after_rebuild(sim.state, sim.ctx)

@@ -11,11 +11,12 @@ hook (:func:`hook_table`, like LAMMPS's ``setmask``), so a hook no effect uses c
 A disabled effect is never constructed, so it allocates nothing and runs no kernel.
 
 Every hook receives the state it works on, ``st`` (:class:`pdfem.state.State`: the store of
-bodies, t, dt, the per-step arrays f, fc, du, kin), and the run's context, ``ctx``
-(:class:`pdfem.context.Context`: communicator, timers, material table, cell grid, blocks,
-the heat handle, ``fail``). A hook adds into the arrays its step point is for (forces into
-st.f or st.fc, heat through the heat handle) and writes its own attributes and store fields;
-it never assigns the state's time or arrays, and never writes another effect's attributes.
+bodies, t, dt, the per-step arrays f, fc, du, kin, the cell reach, time.safety, and ``fail``
+for a failed check), and the run's context, ``ctx`` (:class:`pdfem.context.Context`:
+communicator, timers, material table, cell grid, blocks, the heat and contact handles). A
+hook adds into the arrays its step point is for (forces into st.f or st.fc, heat through the
+heat handle) and writes its own attributes and store fields; it never assigns the state's
+time or arrays, and never writes another effect's attributes.
 """
 
 from __future__ import annotations

@@ -233,7 +233,7 @@ class Contact(Effect):
             what = (f"deeper than contact.delta_max (delta = {res[p, R_DELTA]:.3e} m)"
                     if active[p] == C_ACTIVE else "degenerate (one element inside the other)")
             other = f"wall {-1 - k[2]}" if k[2] < 0 else f"body {k[2]} element {k[3]}"
-            ctx.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
+            st.fail(f"check contact overlap: the contact between body {k[0]} element {k[1]} "
                      f"and {other} is {what}")
 
     def _apply(self, st, ctx, keys, active, nodes, weights, fnod, res, elems, forces):

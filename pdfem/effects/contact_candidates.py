@@ -107,7 +107,7 @@ class Candidates:
         body_boxes(bbox, s.estart, s.ne, 0, s.nbody, boxes)
         owned = (np.arange(g0, s.nbody) < s.nb_own).astype(np.int8)
         pairs = grain_pairs(cells.astype(np.int64), owned, boxes[g0:], ctx.grid.nx,
-                            ctx.grid.ny, ctx.skin, ctx.reach, ctx.grid.period)
+                            ctx.grid.ny, ctx.skin, st.reach, ctx.grid.period)
         pairs[:, :2] += g0
         self.gpairs = pairs[:, :2]
         reach = ctx.skin * (1.0 + REACH_SLACK)
@@ -117,7 +117,7 @@ class Candidates:
         if ctx.grid.periodic_x:
             twice = repeated_pairs(cand)
             if twice:
-                ctx.fail(f"periodic sides: {twice} element pair(s) within the skin of each "
+                st.fail(f"periodic sides: {twice} element pair(s) within the skin of each "
                          "other through both sides of the box; widen domain.box")
         self.cand = self._with_blocks(st, ctx, cand, bbox, boxes, reach)
 

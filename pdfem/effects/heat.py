@@ -223,7 +223,7 @@ class Heat(Effect):
                     bad = conduction_flows(s.x, s.T, s.conn, s.emat, ctx.mat_params, 0,
                                            s.ne_own, self.q)
                     if bad >= 0:
-                        ctx.fail(f"check inverted element: element {s.elem_loc[bad]} of "
+                        st.fail(f"check inverted element: element {s.elem_loc[bad]} of "
                                  f"body {s.elem_gid[bad]} is inverted (heat conduction)")
                 advance_temperature(s.T, self.q, self.src, s.tcap, h, s.nn_own, ctx.partner)
                 hold_temperature(s.T, s.tcap, s.tfix, s.tfixv, s.node_body, s.nn_own, s.hacc,
@@ -243,10 +243,10 @@ class Heat(Effect):
     def _substeps(self, st, ctx, dt):
         """Equal conduction sub-steps within dt, from the global conduction limit of the
         positions at the end of the last step (set with the time step)."""
-        lim = self.cond_dt * ctx.safety
+        lim = self.cond_dt * st.safety
         nsub = 1 if lim >= dt else math.ceil(dt / lim)
         if nsub > NSUB_MAX:
-            ctx.fail(f"check conduction sub-steps: heat conduction needs {nsub} sub-steps of "
+            st.fail(f"check conduction sub-steps: heat conduction needs {nsub} sub-steps of "
                      f"{lim:.3e} s per step of {dt:.3e} s (more than {NSUB_MAX})")
             nsub = NSUB_MAX
         self.nsub = nsub

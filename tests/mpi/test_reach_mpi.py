@@ -27,7 +27,7 @@ def test_a_grain_two_cells_away_is_a_ghost(tmp_path):
         c = s.x[i].mean(axis=0)
         cx = 0.95e-3 if c[0] < 2.0e-3 else 2.05e-3
         s.x[i, 0] = cx + (s.x[i, 0] - c[0]) * (0.545e-3 / 0.4e-3)
-    store, sim.halo = sim.rebuild(sim.store)
+    store, sim.halo, sim.state.reach = sim.rebuild(sim.store)
     sim.state.new_store(store)
     contact = next(e for e in sim.effects if e.name == "contact")
     contact.after_rebuild(sim.state, sim.ctx)

@@ -63,6 +63,16 @@ class Simulation:
         r = scene.resolved
         self.scene, self.comm, self.resolved = scene, comm, r
         self.timers = Timers()
+        self._effects(r, scene)
+        self._elements(r)
+        self._controls(r, scene, restart)
+        self.state = self._first_state(scene, init_state, restart)
+        self._set_up_effects(r)
+        self._start(restart)
+
+    # ------------------------------------------------------------------ set-up, in steps
+    def _effects(self, r, scene):
+        """The effects the scene asks for, their energy terms and the handles the step calls."""
         check_contact_scene(r)
         self.effects = active_effects(r, scene)
         self.effect_names = [e.name for e in self.effects]
@@ -75,8 +85,12 @@ class Simulation:
         self.contact = find(self.effects, Contact)
         damping = find(self.effects, Damping)
         self.gamma = damping.gamma if damping is not None else 0.0
+
+    def _elements(self, r):
+        """The material table, the element rule and its kernel, the store's fields."""
         self.mat_params = build.material_table(r["materials"])
-        nst = build.check_materials(r["materials"], self.mat_params)
+        self.nst = build.check_materials(r["materials"], self.mat_params)
+        self.mat_ids = {name: i for i, name in enumerate(r["materials"])}
         el = r["element"]
         self.nip = 1 if el["rule"] == "1pt" else 4
         self.element_kernel = q4_forces_1pt if el["rule"] == "1pt" else q4_forces_2x2
@@ -92,7 +106,7 @@ class Simulation:
         self.hg_coef = 0.0
         if el["rule"] == "1pt":
             self.hg_coef = float(el["hourglass"]) if kind == "coefficient" else 1.0
-        self.fields = core_fields(self.nip, nst, NACC,
+        self.fields = core_fields(self.nip, self.nst, NACC,
                                   HG_COLS_POINTS if self.hg_model == HG_POINTS else HG_COLS)
         for eff in self.effects:
             self.fields += [f for f in eff.extra_fields if f not in self.fields]
@@ -104,7 +118,10 @@ class Simulation:
                           and any(f.name == "qv" for f in self.fields))
         # Without it the 1-point kernel takes None (compiled without the thermal branches)
         self.no_eth = None if el["rule"] == "1pt" else NO_ETH
-        dom, tm = r["domain"], r["time"]
+
+    def _controls(self, r, scene, restart):
+        """The domain and its cell grid, the time controls, the global layout, the flags."""
+        dom, tm, el = r["domain"], r["time"], r["element"]
         self.box = tuple(dom["box"])
         self.grid = CellGrid(self.box, dom["cell_size"], dom["periodic"] == "x")
         self.skin = dom["skin"]
@@ -118,9 +135,10 @@ class Simulation:
         # Stop and checkpoint requests: local flags, shared by the reduction of next_dt
         self.stop_requested = self.checkpoint_requested = False
         self.local_stop = self.local_ckpt = 0.0
-        self.mat_ids = {name: i for i, name in enumerate(r["materials"])}
-        self.nst = nst
-        # Set-up: the first state's bodies, from the scene or the checkpoint, on their owners
+
+    def _first_state(self, scene, init_state, restart):
+        """The first state: its bodies from the scene or the checkpoint on their cell owners,
+        with their ghosts, the blocks and boundary conditions, the cell reach, time.safety."""
         store, self.owner, blocks, self.bcs = setup.initial_bodies(self, scene, init_state)
         self.blocks, self.nglobal = blocks, len(blocks)
         # Periodic sides: each block's left and right node columns move as one
@@ -131,16 +149,18 @@ class Simulation:
         with self.timers.phase("migration"):
             store, self.halo, reach = self.rebuild(store)
         self.checkpoint = None
+        safety = self.resolved["time"]["safety"]
         if restart is not None:
             store, self.owner, self.checkpoint = setup.restart_bodies(self, restart)
             with self.timers.phase("migration"):
                 store, self.halo, reach = self.rebuild(store)
             store = setup.drop_restart_forces(store, self.fields, self.checkpoint)
-        safety = tm["safety"]
-        if restart is not None:
             # A time step the remedy halved stays halved unless the scene asks for less
             safety = min(safety, self.checkpoint.state.get("safety", safety))
-        self.state = State(store, self.has_contact, safety, reach)
+        return State(store, self.has_contact, safety, reach)
+
+    def _set_up_effects(self, r):
+        """The context, the effects' set-up, the step hooks, the guards and their remedies."""
         # What the effects' hooks read besides the state
         self.ctx = Context(self)
         for eff in self.effects:
@@ -156,9 +176,12 @@ class Simulation:
         self.energy_floor = energy_floor(self.state, self.ctx)
         # The set-up's temporaries are freed: give their pages back to the OS
         trim()
+
+    def _start(self, restart):
+        """Continue exactly where a checkpoint stopped, or: the forces at t = 0, the energy
+        accumulators of the t = 0 state and the first half step."""
         st = self.state
         if restart is not None:
-            # Continue exactly where the checkpoint stopped
             ck = self.checkpoint.state
             st.t, st.nstep, st.dt, st.dt_prev = ck["t"], ck["nstep"], ck["dt"], ck["dt_prev"]
             self.guards.retries_left = min(self.guards.retries,
@@ -169,7 +192,6 @@ class Simulation:
                 st.fc[: st.store.nn_own] = saved
             self.refresh_reductions()
             return
-        # Forces at t = 0 and the first half step; energy accumulators from the t = 0 state
         initial_strain_work(st, self.ctx)
         self.compute_forces()
         for eff in self.hooks["start_work"]:

@@ -108,14 +108,21 @@ def element_to_nodes(x, conn, e0, e1, val, out):
 
 
 @njit(cache=True)
-def _tau(x, conn, sig, e):
-    """p A of element e: the mean pressure of its integration points, p = -(s_xx + s_yy +
-    s_zz) / 3, times its current area (shoelace)."""
+def _area2(x, conn, e):
+    """Twice the area of element e (shoelace)."""
     a = 0.0
     for i in range(4):
         n = conn[e, i]
         m = conn[e, (i + 1) % 4]
         a += x[n, 0] * x[m, 1] - x[m, 0] * x[n, 1]
+    return a
+
+
+@njit(cache=True)
+def _tau(x, conn, sig, e):
+    """p A of element e: the mean pressure of its integration points, p = -(s_xx + s_yy +
+    s_zz) / 3, times its current area (shoelace)."""
+    a = _area2(x, conn, e)
     nip = sig.shape[1]
     p = 0.0
     for q in range(nip):
@@ -134,12 +141,7 @@ def kirchhoff_pressure(x, conn, sig, e0, e1, out):
 def element_areas(x, conn, e0, e1, out):
     """out[e] = the area of element e in [e0, e1) (shoelace) [m^2]."""
     for e in range(e0, e1):
-        a = 0.0
-        for i in range(4):
-            n = conn[e, i]
-            m = conn[e, (i + 1) % 4]
-            a += x[n, 0] * x[m, 1] - x[m, 0] * x[n, 1]
-        out[e] = 0.5 * a
+        out[e] = 0.5 * _area2(x, conn, e)
 
 
 @njit(cache=True)
@@ -156,21 +158,26 @@ def _eos_compression(p, sig, mst, e):
 
 
 @njit(cache=True)
-def coupling_state(x, conn, emat, mat_params, sig, mst, eth, e0, e1, out):
-    """The state the thermo-elastic heat follows, for elements [e0, e1): p_e A_e
+def _coupled(x, conn, p, sig, mst, eth, e, pbuf):
+    """The state the thermo-elastic heat of element e (material row p) follows: p_e A_e
     (:func:`_tau`) of a linear bulk, the mean compression eta of a Mie-Gruneisen material's
     points (eos_gamma > 0; its row softened at the element temperature eth[e, 1] as in the
-    element update)."""
+    element update, into pbuf)."""
+    if not p[EOS_G] > 0.0:
+        return _tau(x, conn, sig, e)
+    if p[SOFT_K] != 0.0:
+        softened(p, eth[e, 1], pbuf)
+        p = pbuf
+    return _eos_compression(p, sig, mst, e)
+
+
+@njit(cache=True)
+def coupling_state(x, conn, emat, mat_params, sig, mst, eth, e0, e1, out):
+    """out[e] = the state the thermo-elastic heat follows (:func:`_coupled`) for elements
+    [e0, e1)."""
     pbuf = np.empty(mat_params.shape[1])
     for e in range(e0, e1):
-        p = mat_params[emat[e]]
-        if p[EOS_G] > 0.0:
-            if p[SOFT_K] != 0.0:
-                softened(p, eth[e, 1], pbuf)
-                p = pbuf
-            out[e] = _eos_compression(p, sig, mst, e)
-        else:
-            out[e] = _tau(x, conn, sig, e)
+        out[e] = _coupled(x, conn, mat_params[emat[e]], sig, mst, eth, e, pbuf)
 
 
 # Columns of the per-element heat by mechanism (cumulative since t = 0) [J/m]
@@ -217,20 +224,14 @@ def element_heat(x, temp, conn, emat, mat_params, sig, mst, eth, area_ref, ewp, 
             for i in range(4):
                 te += 0.25 * temp[conn[e, i]]
             p = mat_params[emat[e]]
+            c = _coupled(x, conn, p, sig, mst, eth, e, pbuf)
             if p[EOS_G] > 0.0:
                 # The adiabatic heat of the Mie-Gruneisen form's compression
-                cp = p[RHO] * p[CP]
-                if p[SOFT_K] != 0.0:
-                    softened(p, eth[e, 1], pbuf)
-                    p = pbuf
-                c = _eos_compression(p, sig, mst, e)
-                ht = p[EOS_G] * cp * te * (c - tau_prev[e]) * area_ref[e]
-                tau_prev[e] = c
+                ht = p[EOS_G] * (p[RHO] * p[CP]) * te * (c - tau_prev[e]) * area_ref[e]
             else:
                 # The linear solid's: 3 alpha T d(p A)
-                tau = _tau(x, conn, sig, e)
-                ht = 3.0 * p[ALPHA] * te * (tau - tau_prev[e])
-                tau_prev[e] = tau
+                ht = 3.0 * p[ALPHA] * te * (c - tau_prev[e])
+            tau_prev[e] = c
             h += ht
             eheat[e, H_THERMOELASTIC] += ht
         if gamma > 0.0:

@@ -171,8 +171,6 @@ class Simulation:
         self.guards = Guards(r["guards"])
         for eff in self.effects:
             self.guards.actions.extend(eff.remedies)
-        # The contact stiffness cap of the cap_contact remedy, kept for a restart (None: none)
-        self.contact_cap = self.contact.stiffness_cap if self.contact is not None else None
         self.energy_floor = energy_floor(self.state, self.ctx)
         # The set-up's temporaries are freed: give their pages back to the OS
         trim()
@@ -207,6 +205,9 @@ class Simulation:
     t = property(lambda self: self.state.t, doc="Time [s].")
     safety = property(lambda self: self.state.safety, doc="time.safety as the remedy left it.")
     reach = property(lambda self: self.state.reach, doc="Cell reach of the last rebuild.")
+    contact_cap = property(
+        lambda self: self.contact.stiffness_cap if self.contact is not None else None,
+        doc="The contact stiffness cap of the cap_contact remedy (None: none), for a restart.")
     dt = property(lambda self: self.state.dt, doc="Length of the next step [s].")
     dt_prev = property(lambda self: self.state.dt_prev, doc="Length of the last step [s].")
     nstep = property(lambda self: self.state.nstep, doc="Steps taken.")

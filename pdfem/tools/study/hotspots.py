@@ -35,8 +35,8 @@ COMPARED = (("mean", "mean"), ("p99", "99th percentile"), ("p99.9", "99.9th perc
 def thermal_variant(doc):
     """The scene dict with every heat effect it can have, when it has no [heat]: heat,
     conduction, dissipation heating, thermo-elastic coupling with thermal expansion when every
-    material has a thermal pressure (a linear bulk, or an equation of state with a Gruneisen
-    coefficient), and, where their owner is present, viscous heating
+    material can take it (a linear bulk with its expansion, or an equation of state with a
+    Gruneisen coefficient and no expansion), and, where their owner is present, viscous heating
     ([bulk_viscosity]) and friction heating ([contact]). A scene with [heat] keeps its own
     heat effects. Either way a given output.fields gains element_temperature and the heat_*
     fields the census reads."""

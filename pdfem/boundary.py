@@ -18,13 +18,25 @@ accounted by the integrator as for any velocity condition.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 
 if TYPE_CHECKING:
-    from pdfem.setup import Blocks
     from pdfem.store import Batch, Store
+
+
+class Blocks(Protocol):
+    """What the conditions ask of the blocks (pdfem.setup.Blocks, which imports this
+    module)."""
+
+    names: list[str]
+
+    def index(self, name: str) -> int: ...
+
+    def gid(self, name: str) -> int: ...
+
+    def nodes(self, name: str, which: str = "all") -> np.ndarray: ...
 
 
 def factor(t: float, release: float, ramp: float) -> float:
